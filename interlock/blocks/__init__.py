@@ -1,0 +1,1 @@
+"""Blocks from deformed fundamental domains, RhomBlocks, and assemblies of them."""

@@ -1,0 +1,1 @@
+"""Exports, pictures and the gallery of generated and verified assemblies."""

@@ -1,0 +1,1 @@
+"""Deciding whether an assembly interlocks: contacts, interlocking matrix, verdicts."""
