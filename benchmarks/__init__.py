@@ -1,0 +1,1 @@
+"""Benchmarks: scripts that write JSON results and PNG charts to ``benchmarks/results``."""
