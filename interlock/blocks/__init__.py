@@ -1,1 +1,14 @@
-"""Blocks from deformed fundamental domains, RhomBlocks, and assemblies of them."""
+"""Blocks from deformed fundamental domains, RhomBlocks, and assemblies of them.
+
+>>> from interlock import wallpaper
+>>> from interlock.blocks import escher_block, patch
+>>> X = escher_block(wallpaper.group("p6"), {0: [(0.25, 0.08)], 1: [(0.55, 0.15)]})
+>>> len(patch(X, 1.0))
+31
+"""
+
+from interlock.blocks.assembly import Assembly, AssemblyError
+from interlock.blocks.escher import Block, DeformationError, escher_block
+from interlock.blocks.orbits import patch, periodic_cell
+
+__all__ = ["Assembly", "AssemblyError", "Block", "DeformationError", "escher_block", "patch", "periodic_cell"]

@@ -1,0 +1,309 @@
+"""Assemblies: blocks as instanced meshes with labels, a frame and a neighbourhood graph."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from functools import cached_property
+from pathlib import Path
+
+import networkx as nx
+import numpy as np
+import shapely
+import trimesh
+
+from interlock.errors import InterlockError
+
+__all__ = ["Assembly", "AssemblyError", "NEIGHBOUR_RTOL", "RIGID_TOL"]
+
+#: Bounding boxes closer than this (relative to the model size) count as touching.
+NEIGHBOUR_RTOL = 1e-6
+#: Allowed deviation of a transform's linear part from an orthogonal matrix.
+RIGID_TOL = 1e-9
+
+
+class AssemblyError(InterlockError):
+    """Meshes, transforms, labels or a frame that do not form an assembly."""
+
+
+class Assembly:
+    """A set of rigid blocks, each an instance of a shared mesh under a 4x4 transform.
+
+    Block ``i`` is ``meshes[types[i]]`` moved by ``transforms[i]`` (a rotation
+    or, for mirror-image blocks, an improper orthogonal matrix, plus a
+    translation).  Sharing one mesh per block type keeps large patches cheap.
+
+    Parameters
+    ----------
+    meshes : sequence of trimesh.Trimesh
+        The block types; each must be closed (watertight) with positive volume.
+    types : sequence of int
+        For each block, the index of its mesh.
+    transforms : array (n, 4, 4)
+        For each block, the placement of its mesh.
+    labels : sequence, optional
+        One hashable label per block (group element, tiling cell, file name);
+        defaults to ``0 .. n-1``.
+    frame : iterable of int, optional
+        Indices of the fixed blocks.
+    lattice : array (2, 3), optional
+        For a periodic cell: the two translation vectors that repeat it.
+    boundary : iterable of int, optional
+        Indices of the outer ring, when the constructor knows it (patches);
+        otherwise :meth:`boundary` uses the convex hull.
+    info : dict, optional
+        Free-form provenance (group, deformation, preset name), kept as is.
+
+    Examples
+    --------
+    >>> cubes = [trimesh.creation.box(bounds=[[x, 0, 0], [x + 1, 1, 1]]) for x in range(3)]
+    >>> a = Assembly.from_meshes(cubes, frame=[0, 2])
+    >>> len(a), a.frame, sorted(a.neighbours.edges)
+    (3, (0, 2), [(0, 1), (1, 2)])
+    """
+
+    def __init__(self, meshes, types, transforms, labels=None, frame=(), lattice=None, boundary=None, info=None):
+        self.meshes: tuple[trimesh.Trimesh, ...] = tuple(_checked_mesh(m, i) for i, m in enumerate(meshes))
+        types = np.asarray(types, dtype=int).reshape(-1)
+        if types.size and (types.min() < 0 or types.max() >= len(self.meshes)):
+            raise AssemblyError(f"block types must index the {len(self.meshes)} meshes, got values {types.min()}..{types.max()}")
+        transforms = np.asarray(transforms, dtype=float).reshape(-1, 4, 4)
+        if len(transforms) != len(types):
+            raise AssemblyError(f"got {len(types)} block types but {len(transforms)} transforms; give one of each per block")
+        _check_transforms(transforms)
+        types.setflags(write=False)
+        transforms.setflags(write=False)
+        self.types = types
+        self.transforms = transforms
+        self.labels: tuple = tuple(range(len(types))) if labels is None else tuple(labels)
+        if len(self.labels) != len(types):
+            raise AssemblyError(f"got {len(self.labels)} labels for {len(types)} blocks")
+        self.frame: tuple[int, ...] = self._indices(frame, "frame")
+        self.lattice = None if lattice is None else _checked_lattice(lattice)
+        self._boundary = None if boundary is None else self._indices(boundary, "boundary")
+        self.info = dict(info or {})
+
+    # --- constructors ----------------------------------------------------------
+    @classmethod
+    def from_meshes(cls, meshes: Sequence[trimesh.Trimesh], frame=(), labels=None, info=None) -> Assembly:
+        """One block per closed mesh, placed where it is (identity transforms)."""
+        meshes = list(meshes)
+        return cls(meshes, range(len(meshes)), np.tile(np.eye(4), (len(meshes), 1, 1)), labels, frame, info=info)
+
+    @classmethod
+    def load(cls, paths, frame=()) -> Assembly:
+        """Blocks from mesh files (OBJ, STL, PLY, GLB, ... through trimesh).
+
+        ``paths`` is a sequence of files, one block each (labels: file names),
+        or one file holding every block: its objects (OBJ ``o`` statements,
+        scene nodes of GLB/3MF) are the blocks, or else its connected bodies.
+        Bodies that touch cannot be told apart in a single STL or PLY file;
+        that is an error asking for one file per block or an OBJ with objects.
+        Polygonal faces are triangulated.
+        """
+        if isinstance(paths, (str, Path)):
+            path = Path(paths)
+            bodies = _load_bodies(path)
+            labels = [f"{path.name}:{name}" for name, _ in bodies]
+            return cls.from_meshes([m for _, m in bodies], frame=frame, labels=labels, info={"source": [str(path)]})
+        paths = [Path(p) for p in paths]
+        if not paths:
+            raise AssemblyError("no mesh files given; pass one path or a list of paths")
+        meshes = [trimesh.util.concatenate([m for _, m in _load_bodies(p)]) for p in paths]
+        return cls.from_meshes(meshes, frame=frame, labels=[p.name for p in paths],
+                               info={"source": [str(p) for p in paths]})
+
+    def with_frame(self, frame) -> Assembly:
+        """The same blocks with another frame."""
+        return Assembly(self.meshes, self.types, self.transforms, self.labels, frame, self.lattice,
+                        self._boundary, self.info)
+
+    # --- per-block data ----------------------------------------------------------
+    def __len__(self) -> int:
+        return len(self.types)
+
+    def __repr__(self) -> str:
+        kind = "periodic cell" if self.lattice is not None else "assembly"
+        return f"<{kind}: {len(self)} blocks of {len(self.meshes)} type(s), frame {len(self.frame)}>"
+
+    def mesh(self, i: int) -> trimesh.Trimesh:
+        """Block ``i`` as a new mesh in world coordinates (outward-oriented, also when mirrored)."""
+        if not -len(self) <= i < len(self):
+            raise AssemblyError(f"block index {i} is out of range for {len(self)} blocks")
+        return self.meshes[self.types[i]].copy().apply_transform(self.transforms[i])
+
+    def world_meshes(self) -> list[trimesh.Trimesh]:
+        """Every block as a mesh in world coordinates."""
+        return [self.mesh(i) for i in range(len(self))]
+
+    @cached_property
+    def mirrored(self) -> np.ndarray:
+        """Whether each block is a mirror image of its mesh (transform with determinant -1)."""
+        return np.linalg.det(self.transforms[:, :3, :3]) < 0
+
+    @cached_property
+    def centroids(self) -> np.ndarray:
+        """Centres of mass in world coordinates, shape (n, 3)."""
+        centres = np.array([m.center_mass for m in self.meshes]).reshape(-1, 3)[self.types]
+        return np.einsum("nij,nj->ni", self.transforms[:, :3, :3], centres) + self.transforms[:, :3, 3]
+
+    @cached_property
+    def volumes(self) -> np.ndarray:
+        return np.array([m.volume for m in self.meshes])[self.types]
+
+    @cached_property
+    def bounds(self) -> np.ndarray:
+        """Axis-aligned bounding box of each block, shape (n, 2, 3)."""
+        out = np.empty((len(self), 2, 3))
+        for t, mesh in enumerate(self.meshes):
+            idx = np.flatnonzero(self.types == t)
+            if idx.size:
+                world = np.einsum("nij,vj->nvi", self.transforms[idx, :3, :3], mesh.vertices)
+                world += self.transforms[idx, None, :3, 3]
+                out[idx, 0], out[idx, 1] = world.min(axis=1), world.max(axis=1)
+        return out
+
+    @cached_property
+    def scale(self) -> float:
+        """The model size: diagonal of the bounding box of all blocks (for relative tolerances)."""
+        if not len(self):
+            return 1.0
+        lo, hi = self.bounds[:, 0].min(axis=0), self.bounds[:, 1].max(axis=0)
+        return float(np.linalg.norm(hi - lo)) or 1.0
+
+    # --- neighbourhood -----------------------------------------------------------
+    @cached_property
+    def neighbours(self) -> nx.Graph:
+        """Candidate contacts: blocks whose bounding boxes touch (``NEIGHBOUR_RTOL``).
+
+        Nodes are block indices with attributes ``label``, ``type``,
+        ``mirrored`` and ``fixed``.  Every face-to-face contact is an edge of
+        this graph; some edges (blocks touching along an edge or a corner) carry
+        no face contact.  Built from a spatial index (shapely STRtree on the xy
+        boxes, then the z intervals), never from all pairs.
+        """
+        return self.neighbour_graph(NEIGHBOUR_RTOL)
+
+    def neighbour_graph(self, rtol: float = NEIGHBOUR_RTOL) -> nx.Graph:
+        """:attr:`neighbours` with another tolerance (relative to :attr:`scale`)."""
+        graph = nx.Graph()
+        fixed = set(self.frame)
+        for i in range(len(self)):
+            graph.add_node(i, label=self.labels[i], type=int(self.types[i]),
+                           mirrored=bool(self.mirrored[i]), fixed=i in fixed)
+        if len(self) < 2:
+            return graph
+        pad = rtol * self.scale
+        lo, hi = self.bounds[:, 0] - pad, self.bounds[:, 1] + pad
+        boxes = shapely.box(lo[:, 0], lo[:, 1], hi[:, 0], hi[:, 1])
+        left, right = shapely.STRtree(boxes).query(boxes, predicate="intersects")
+        keep = left < right
+        left, right = left[keep], right[keep]
+        keep = (lo[left, 2] <= hi[right, 2]) & (lo[right, 2] <= hi[left, 2])
+        graph.add_edges_from(zip(left[keep].tolist(), right[keep].tolist()))
+        return graph
+
+    def boundary(self) -> tuple[int, ...]:
+        """Indices of the blocks on the outer ring: the natural frame (main paper Cor. 4.8).
+
+        For a patch of a generated assembly these are the blocks with a
+        neighbour across an edge of their tile that is missing from the patch.
+        For other assemblies, seen as a layer: the blocks with a vertex on the
+        boundary of the convex hull of all vertices projected onto the layer's
+        plane (the lattice plane, or else the plane of the two largest
+        principal axes).
+        """
+        if self._boundary is not None:
+            return self._boundary
+        if len(self) < 3:
+            return tuple(range(len(self)))
+        meshes = self.world_meshes()
+        points = np.vstack([m.vertices for m in meshes])
+        if self.lattice is not None:
+            plane = np.linalg.qr(self.lattice.T)[0].T
+        else:
+            centred = points - points.mean(axis=0)
+            plane = np.linalg.svd(centred, full_matrices=False)[2][:2]
+        ring = shapely.MultiPoint(points @ plane.T).convex_hull.exterior
+        tol = 1e-9 * self.scale
+        return tuple(i for i, m in enumerate(meshes)
+                     if (shapely.distance(shapely.points(m.vertices @ plane.T), ring) <= tol).any())
+
+    # --- internals -----------------------------------------------------------------
+    def _indices(self, values, what) -> tuple[int, ...]:
+        values = [] if values is None else list(values)
+        out = []
+        for v in values:
+            if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, np.integer)):
+                raise AssemblyError(f"{what} must list block indices (integers), got {v!r}")
+            if not 0 <= v < len(self.types):
+                raise AssemblyError(f"{what} index {v} is out of range for {len(self.types)} blocks")
+            out.append(int(v))
+        return tuple(sorted(set(out)))
+
+
+def _checked_mesh(mesh, i) -> trimesh.Trimesh:
+    if not isinstance(mesh, trimesh.Trimesh):
+        raise AssemblyError(f"block type {i} must be a trimesh.Trimesh, got {type(mesh).__name__}")
+    if len(mesh.faces) == 0 or not np.all(np.isfinite(mesh.vertices)):
+        raise AssemblyError(f"mesh {i} is empty or has non-finite vertices")
+    if not mesh.is_watertight:
+        open_edges = len(trimesh.grouping.group_rows(mesh.edges_sorted, require_count=1))
+        raise AssemblyError(f"mesh {i} is not closed: {open_edges} edges belong to one face only; blocks must be closed (watertight) meshes")
+    if mesh.volume < 0:
+        mesh = mesh.copy()
+        mesh.invert()
+    if not mesh.volume > 0:
+        raise AssemblyError(f"mesh {i} encloses no volume")
+    return mesh
+
+
+def _check_transforms(transforms):
+    if not np.all(np.isfinite(transforms)):
+        raise AssemblyError("transforms must be finite 4x4 matrices")
+    if not np.allclose(transforms[:, 3], [0, 0, 0, 1]):
+        raise AssemblyError("transforms must be affine: the last row of each 4x4 matrix is (0, 0, 0, 1)")
+    linear = transforms[:, :3, :3]
+    err = np.abs(linear @ linear.transpose(0, 2, 1) - np.eye(3)).max(initial=0.0)
+    if err > RIGID_TOL:
+        raise AssemblyError(f"transforms must be rigid motions or mirror images (orthogonal linear part); deviation {err:.2e}")
+
+
+def _checked_lattice(lattice) -> np.ndarray:
+    lattice = np.array(lattice, dtype=float)
+    if lattice.shape != (2, 3) or not np.all(np.isfinite(lattice)):
+        raise AssemblyError(f"a periodic cell needs two finite translation vectors, shape (2, 3); got {lattice.shape}")
+    if np.linalg.norm(np.cross(lattice[0], lattice[1])) <= 1e-12 * np.linalg.norm(lattice) ** 2:
+        raise AssemblyError("the two lattice vectors of a periodic cell must be linearly independent")
+    lattice.setflags(write=False)
+    return lattice
+
+
+def _load_bodies(path: Path) -> list[tuple[str, trimesh.Trimesh]]:
+    """(name, mesh in file coordinates) for every object of a mesh file, in file order."""
+    if not path.is_file():
+        raise AssemblyError(f"mesh file {path} does not exist")
+    obj = path.suffix.lower() == ".obj"
+    try:
+        scene = trimesh.load_scene(path, **({"split_objects": True, "group_material": False} if obj else {}))
+    except Exception as error:  # trimesh raises many types for unreadable files
+        raise AssemblyError(f"cannot read {path} as a mesh ({type(error).__name__}: {error})") from None
+    bodies = []
+    for node in scene.graph.nodes_geometry:
+        transform, name = scene.graph[node]
+        geometry = scene.geometry[name]
+        if isinstance(geometry, trimesh.Trimesh) and len(geometry.faces):
+            bodies.append((str(name), geometry.copy().apply_transform(transform)))
+    if not bodies:
+        raise AssemblyError(f"{path} holds no triangle mesh")
+    if obj and len(bodies) > 1:
+        order = [line.split(maxsplit=1)[1].strip() for line in path.read_text(errors="replace").splitlines()
+                 if line.startswith("o ") and len(line.split(maxsplit=1)) == 2]
+        bodies.sort(key=lambda body: order.index(body[0]) if body[0] in order else len(order))
+    if len(bodies) == 1:
+        parts = bodies[0][1].split(only_watertight=False)
+        if len(parts) > 1:
+            if not all(part.is_watertight for part in parts):
+                raise AssemblyError(f"{path} holds several bodies that touch, which a single {path.suffix} file cannot "
+                                    "separate; give one file per block, or an OBJ file with one object ('o') per block")
+            bodies = [(f"body{k}", part) for k, part in enumerate(parts)]
+    return bodies

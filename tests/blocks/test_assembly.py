@@ -1,0 +1,153 @@
+"""Assembly: instancing, loading, validation, neighbourhood, boundary, periodic cells."""
+
+import numpy as np
+import pytest
+import trimesh
+
+from interlock import InterlockError, wallpaper
+from interlock.blocks import Assembly, AssemblyError, escher_block, patch, periodic_cell
+
+
+def _row_of_cubes(n=3):
+    return [trimesh.creation.box(bounds=[[x, 0, 0], [x + 1, 1, 1]]) for x in range(n)]
+
+
+def test_from_meshes_and_neighbours():
+    grid = [trimesh.creation.box(bounds=[[x, y, 0], [x + 1, y + 1, 1]]) for x in range(3) for y in range(3)]
+    a = Assembly.from_meshes(grid, frame=[0, 1, 2, 3, 5, 6, 7, 8])
+    assert len(a) == 9 and a.frame == (0, 1, 2, 3, 5, 6, 7, 8)
+    # bounding boxes of the middle cube touch all 8 others (faces, edges, corners)
+    assert sorted(a.neighbours[4]) == [0, 1, 2, 3, 5, 6, 7, 8]
+    assert a.neighbours.number_of_edges() == 20
+    assert a.neighbours.nodes[4]["fixed"] is False and a.neighbours.nodes[0]["fixed"] is True
+    np.testing.assert_allclose(a.centroids[4], [1.5, 1.5, 0.5])
+    assert a.boundary() == (0, 1, 2, 3, 5, 6, 7, 8)  # all but the middle touch the hull
+    assert a.scale == pytest.approx(np.sqrt(19))
+
+
+def test_separated_blocks_are_not_neighbours():
+    cubes = [trimesh.creation.box(bounds=[[0, 0, 0], [1, 1, 1]]), trimesh.creation.box(bounds=[[1.01, 0, 0], [2, 1, 1]])]
+    assert Assembly.from_meshes(cubes).neighbours.number_of_edges() == 0
+
+
+@pytest.mark.parametrize("suffix", [".stl", ".obj", ".ply"])
+def test_load_mesh_files(tmp_path, suffix):
+    paths = []
+    for k, mesh in enumerate(_row_of_cubes()):
+        path = tmp_path / f"part_{k}{suffix}"
+        mesh.export(path)
+        paths.append(path)
+    a = Assembly.load(paths, frame=[0])
+    assert len(a) == 3 and a.labels == tuple(p.name for p in paths)
+    np.testing.assert_allclose(a.volumes, 1.0)
+
+    # one file with several separate bodies: one block per body
+    apart = tmp_path / f"apart{suffix}"
+    trimesh.util.concatenate([m.copy().apply_translation([k, 0, 0]) for k, m in enumerate(_row_of_cubes(2))]).export(apart)
+    assert len(Assembly.load(apart)) == 2
+
+
+def test_one_obj_file_with_objects_gives_blocks_in_file_order(tmp_path):
+    scene = trimesh.Scene()
+    for k, mesh in enumerate(_row_of_cubes(3)):
+        scene.add_geometry(mesh, geom_name=f"part{k}")
+    path = tmp_path / "parts.obj"
+    scene.export(path)
+    a = Assembly.load(path)
+    assert a.labels == ("parts.obj:part0", "parts.obj:part1", "parts.obj:part2")
+    np.testing.assert_allclose(a.centroids[:, 0], [0.5, 1.5, 2.5])
+
+
+def test_touching_bodies_in_one_stl_are_refused(tmp_path):
+    path = tmp_path / "row.stl"
+    trimesh.util.concatenate(_row_of_cubes(2)).export(path)
+    with pytest.raises(AssemblyError, match="several bodies that touch"):
+        Assembly.load(path)
+
+
+def test_load_errors(tmp_path):
+    with pytest.raises(AssemblyError, match="does not exist"):
+        Assembly.load(tmp_path / "missing.obj")
+    junk = tmp_path / "junk.stl"
+    junk.write_text("not a mesh at all")
+    with pytest.raises(AssemblyError, match="junk.stl"):
+        Assembly.load([junk])
+    with pytest.raises(AssemblyError, match="no mesh files"):
+        Assembly.load([])
+
+
+def test_bad_assemblies_are_clear_errors():
+    cube = trimesh.creation.box()
+    open_box = trimesh.Trimesh(cube.vertices, cube.faces[:-1])
+    with pytest.raises(AssemblyError, match="mesh 0 is not closed"):
+        Assembly.from_meshes([open_box])
+    with pytest.raises(AssemblyError, match="frame index 5 is out of range for 1 blocks"):
+        Assembly.from_meshes([cube], frame=[5])
+    with pytest.raises(AssemblyError, match="frame must list block indices"):
+        Assembly.from_meshes([cube], frame=["a"])
+    with pytest.raises(AssemblyError, match="rigid motions or mirror images"):
+        Assembly([cube], [0], [np.diag([2.0, 1, 1, 1])])
+    with pytest.raises(AssemblyError, match="1 block types but 2 transforms"):
+        Assembly([cube], [0], [np.eye(4), np.eye(4)])
+    with pytest.raises(AssemblyError, match="must index the 1 meshes"):
+        Assembly([cube], [1], [np.eye(4)])
+    with pytest.raises(AssemblyError, match="linearly independent"):
+        Assembly([cube], [0], [np.eye(4)], lattice=[[1, 0, 0], [2, 0, 0]])
+    with pytest.raises(AssemblyError, match="trimesh.Trimesh"):
+        Assembly.from_meshes(["cube"])
+    assert issubclass(AssemblyError, InterlockError)
+
+
+def test_inward_meshes_are_turned_outward():
+    cube = trimesh.creation.box()
+    cube.invert()
+    assert Assembly.from_meshes([cube]).meshes[0].volume == pytest.approx(1.0)
+
+
+def test_patch_instances_one_mesh_and_marks_its_outer_ring():
+    group = wallpaper.group("p4")
+    block = escher_block(group, {0: [(0.25, 0.1)], 1: [(0.4, 0.25)]})
+    p = patch(block, 1.5)
+    assert len(p.meshes) == 1 and p.transforms.shape == (len(p), 4, 4)
+    assert p.labels[0].is_identity and set(p.labels) == set(group.elements_within(1.5))
+    ring = set(p.boundary())
+    inner = [i for i in range(len(p)) if i not in ring]
+    assert inner and ring
+    # an inner block has all its edge-neighbours in the patch; a ring block lacks one
+    present = set(p.labels)
+    steps = [s.element for s in group.side_pairings()]
+    assert all(all(p.labels[i] @ s in present for s in steps) for i in inner)
+    assert all(any(p.labels[i] @ s not in present for s in steps) for i in ring)
+    assert patch(block, 1.5, frame="boundary").frame == tuple(sorted(ring))
+    with pytest.raises(InterlockError, match="frame must be None, 'boundary'"):
+        patch(block, 1.0, frame="outer")
+    with pytest.raises(InterlockError, match="needs a Block"):
+        patch(block.mesh, 1.0)
+
+
+@pytest.mark.parametrize("name", ["p1", "p3", "pgg", "p6m"])
+def test_periodic_cell_repeats_to_the_patch(name):
+    group = wallpaper.group(name)
+    block = escher_block(group, {})
+    cell = periodic_cell(block)
+    assert len(cell) == group.point_group_order
+    np.testing.assert_allclose(cell.lattice[:, :2], group.lattice)
+    assert not cell.lattice[:, 2].any()
+    # every block of a patch is a cell block moved by a lattice translation
+    p = patch(block, 1.0)
+    for g, transform in zip(p.labels, p.transforms):
+        coset, shift = group.decompose(g)
+        expected = cell.transforms[coset].copy()
+        expected[:3, 3] += np.asarray(shift) @ cell.lattice
+        np.testing.assert_allclose(transform, expected, atol=1e-12)
+
+
+def test_world_meshes_keep_volume_and_orientation_when_mirrored():
+    block = escher_block(wallpaper.group("pg"), {0: [(0.25, 0.1)]})
+    p = patch(block, 1.0)
+    assert p.mirrored.any() and not p.mirrored.all()
+    for i in np.flatnonzero(p.mirrored):
+        m = p.mesh(i)
+        assert m.is_winding_consistent and m.volume == pytest.approx(block.volume)
+    with pytest.raises(AssemblyError, match="out of range"):
+        p.mesh(len(p))
