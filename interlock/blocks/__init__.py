@@ -9,6 +9,8 @@
 
 from interlock.blocks.assembly import Assembly, AssemblyError
 from interlock.blocks.escher import Block, DeformationError, escher_block
+from interlock.blocks import presets
 from interlock.blocks.orbits import patch, periodic_cell
 
-__all__ = ["Assembly", "AssemblyError", "Block", "DeformationError", "escher_block", "patch", "periodic_cell"]
+__all__ = ["Assembly", "AssemblyError", "Block", "DeformationError", "escher_block", "patch", "periodic_cell",
+           "presets"]

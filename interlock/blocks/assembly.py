@@ -62,7 +62,7 @@ class Assembly:
     """
 
     def __init__(self, meshes, types, transforms, labels=None, frame=(), lattice=None, boundary=None, info=None):
-        self.meshes: tuple[trimesh.Trimesh, ...] = tuple(_checked_mesh(m, i) for i, m in enumerate(meshes))
+        self.meshes: tuple[trimesh.Trimesh, ...] = tuple(_checked_mesh(m, f"mesh {i}") for i, m in enumerate(meshes))
         types = np.asarray(types, dtype=int).reshape(-1)
         if types.size and (types.min() < 0 or types.max() >= len(self.meshes)):
             raise AssemblyError(f"block types must index the {len(self.meshes)} meshes, got values {types.min()}..{types.max()}")
@@ -87,6 +87,9 @@ class Assembly:
     def from_meshes(cls, meshes: Sequence[trimesh.Trimesh], frame=(), labels=None, info=None) -> Assembly:
         """One block per closed mesh, placed where it is (identity transforms)."""
         meshes = list(meshes)
+        names = labels if labels is not None and len(labels) == len(meshes) else range(len(meshes))
+        meshes = [_checked_mesh(m, f"block {k} ({name})" if labels is not None else f"block {k}")
+                  for k, (m, name) in enumerate(zip(meshes, names))]
         return cls(meshes, range(len(meshes)), np.tile(np.eye(4), (len(meshes), 1, 1)), labels, frame, info=info)
 
     @classmethod
@@ -108,7 +111,7 @@ class Assembly:
         paths = [Path(p) for p in paths]
         if not paths:
             raise AssemblyError("no mesh files given; pass one path or a list of paths")
-        meshes = [trimesh.util.concatenate([m for _, m in _load_bodies(p)]) for p in paths]
+        meshes = [trimesh.util.concatenate([m for _, m in _load_bodies(p, split=False)]) for p in paths]
         return cls.from_meshes(meshes, frame=frame, labels=[p.name for p in paths],
                                info={"source": [str(p) for p in paths]})
 
@@ -241,19 +244,28 @@ class Assembly:
         return tuple(sorted(set(out)))
 
 
-def _checked_mesh(mesh, i) -> trimesh.Trimesh:
+def _checked_mesh(mesh, name) -> trimesh.Trimesh:
+    """The mesh, outward-oriented; it must be closed: every directed edge matched by its reverse.
+
+    Non-manifold edges (four faces meeting, as in voxel parts) are allowed.
+    """
     if not isinstance(mesh, trimesh.Trimesh):
-        raise AssemblyError(f"block type {i} must be a trimesh.Trimesh, got {type(mesh).__name__}")
+        raise AssemblyError(f"{name} must be a trimesh.Trimesh, got {type(mesh).__name__}")
     if len(mesh.faces) == 0 or not np.all(np.isfinite(mesh.vertices)):
-        raise AssemblyError(f"mesh {i} is empty or has non-finite vertices")
+        raise AssemblyError(f"{name} is empty or has non-finite vertex coordinates")
     if not mesh.is_watertight:
-        open_edges = len(trimesh.grouping.group_rows(mesh.edges_sorted, require_count=1))
-        raise AssemblyError(f"mesh {i} is not closed: {open_edges} edges belong to one face only; blocks must be closed (watertight) meshes")
+        directed = mesh.faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
+        edges, counts = np.unique(directed, axis=0, return_counts=True)
+        count_of = dict(zip(map(tuple, edges.tolist()), counts.tolist()))
+        unmatched = sum(1 for (a, b), k in count_of.items() if count_of.get((b, a), 0) != k)
+        if unmatched:
+            raise AssemblyError(f"{name} is not a closed, consistently oriented surface ({unmatched} edges without "
+                                "a matching opposite edge); blocks must be closed polyhedra")
     if mesh.volume < 0:
         mesh = mesh.copy()
         mesh.invert()
     if not mesh.volume > 0:
-        raise AssemblyError(f"mesh {i} encloses no volume")
+        raise AssemblyError(f"{name} encloses no volume")
     return mesh
 
 
@@ -278,8 +290,11 @@ def _checked_lattice(lattice) -> np.ndarray:
     return lattice
 
 
-def _load_bodies(path: Path) -> list[tuple[str, trimesh.Trimesh]]:
-    """(name, mesh in file coordinates) for every object of a mesh file, in file order."""
+def _load_bodies(path: Path, split: bool = True) -> list[tuple[str, trimesh.Trimesh]]:
+    """(name, mesh in file coordinates) for every object of a mesh file, in file order.
+
+    With ``split``, a file holding one object is split into its connected bodies.
+    """
     if not path.is_file():
         raise AssemblyError(f"mesh file {path} does not exist")
     obj = path.suffix.lower() == ".obj"
@@ -292,14 +307,16 @@ def _load_bodies(path: Path) -> list[tuple[str, trimesh.Trimesh]]:
         transform, name = scene.graph[node]
         geometry = scene.geometry[name]
         if isinstance(geometry, trimesh.Trimesh) and len(geometry.faces):
-            bodies.append((str(name), geometry.copy().apply_transform(transform)))
+            body = geometry.copy().apply_transform(transform)
+            body.merge_vertices(merge_tex=True, merge_norm=True)  # per-face normals must not split corners
+            bodies.append((str(name), body))
     if not bodies:
         raise AssemblyError(f"{path} holds no triangle mesh")
     if obj and len(bodies) > 1:
         order = [line.split(maxsplit=1)[1].strip() for line in path.read_text(errors="replace").splitlines()
                  if line.startswith("o ") and len(line.split(maxsplit=1)) == 2]
         bodies.sort(key=lambda body: order.index(body[0]) if body[0] in order else len(order))
-    if len(bodies) == 1:
+    if split and len(bodies) == 1:
         parts = bodies[0][1].split(only_watertight=False)
         if len(parts) > 1:
             if not all(part.is_watertight for part in parts):

@@ -24,6 +24,8 @@ __all__ = ["Block", "DeformationError", "escher_block", "DEFORMATION_RTOL"]
 
 #: Points closer than this (relative to sqrt(cell area)) are the same point.
 DEFORMATION_RTOL = 1e-9
+#: Slice segments cross only where every orientation area exceeds this times the cell area.
+CROSSING_RTOL = 1e-12
 
 
 class DeformationError(InterlockError):
@@ -130,7 +132,7 @@ def escher_block(group: WallpaperGroup, deformation: Mapping, height: float = 1.
     full = _equivariant_deformation(group, deformation, tol)
     corners = np.asarray(group.fundamental_domain().exterior.coords)[:-1]
     top_ring = _top_ring(corners, full, tol, group.name)
-    _check_slices(corners, full, group.name)
+    _check_slices(corners, full, group.name, CROSSING_RTOL * group.cell_area)
     mesh = _mesh(group, corners, full, top_ring, height)
     return Block(
         mesh=mesh,
@@ -228,14 +230,16 @@ def _top_ring(corners, full, tol, name) -> np.ndarray:
     return ring
 
 
-def _check_slices(corners, full, name):
+def _check_slices(corners, full, name, area_tol):
     """The block's horizontal slices must be simple polygons at every height.
 
     Slice vertices move linearly with the height ``t`` in (0, 1), so every
     orientation test between two slice segments is a quadratic in ``t``.  Two
     segments can only start or stop crossing at a root of one of these
     quadratics; testing for proper crossings at the midpoints between
-    consecutive roots therefore decides the question for all heights.
+    consecutive roots therefore decides the question for all heights.  A
+    crossing counts when all four orientation areas exceed ``area_tol``
+    (touching within rounding is not a crossing).
     """
     start, end, owner = _slice_vertices(corners, full)
     n = len(start)
@@ -252,7 +256,8 @@ def _check_slices(corners, full, name):
     times = (critical[:-1] + critical[1:]) / 2
     for t in times:
         o = [np.polyval(c.T[::-1], t) for c in np.split(quadratics, 4)]
-        crossing = (o[0] * o[1] < 0) & (o[2] * o[3] < 0)
+        clear = np.min(np.abs(o), axis=0) > area_tol
+        crossing = (o[0] * o[1] < 0) & (o[2] * o[3] < 0) & clear
         if crossing.any():
             k = int(np.argmax(crossing))
             raise DeformationError(

@@ -1,1 +1,15 @@
-"""Deciding whether an assembly interlocks: contacts, interlocking matrix, verdicts."""
+"""Deciding whether an assembly interlocks: contacts, interlocking matrix, verdicts.
+
+>>> import trimesh
+>>> from interlock.blocks import Assembly
+>>> from interlock.verify import check
+>>> grid = [trimesh.creation.box(bounds=[[x, y, 0], [x + 1, y + 1, 1]]) for x in range(3) for y in range(3)]
+>>> print(check(Assembly.from_meshes(grid), frame=[0, 1, 2, 3, 5, 6, 7, 8]))
+not infinitesimally interlocked: block 4 has a first-order motion that keeps every contact (A x = 0, kernel dimension 1) (A 16x6, rank 5)
+"""
+
+from interlock.verify.check import Verdict, check
+from interlock.verify.contacts import Contact, contacts
+from interlock.verify.matrix import InterlockingMatrix, interlocking_matrix
+
+__all__ = ["Contact", "contacts", "InterlockingMatrix", "interlocking_matrix", "Verdict", "check"]

@@ -79,7 +79,7 @@ def test_load_errors(tmp_path):
 def test_bad_assemblies_are_clear_errors():
     cube = trimesh.creation.box()
     open_box = trimesh.Trimesh(cube.vertices, cube.faces[:-1])
-    with pytest.raises(AssemblyError, match="mesh 0 is not closed"):
+    with pytest.raises(AssemblyError, match="block 0 is not a closed"):
         Assembly.from_meshes([open_box])
     with pytest.raises(AssemblyError, match="frame index 5 is out of range for 1 blocks"):
         Assembly.from_meshes([cube], frame=[5])

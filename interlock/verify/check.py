@@ -1,0 +1,269 @@
+"""Deciding infinitesimal interlocking: LP + rank (main paper Def. 2.7, Def. 3.3, Prop. 3.10)."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.linalg
+import scipy.optimize
+import scipy.sparse as sp
+import scipy.sparse.linalg
+
+from interlock.blocks.assembly import Assembly
+from interlock.errors import InterlockError
+from interlock.verify.contacts import contacts as find_contacts
+from interlock.verify.matrix import InterlockingMatrix, interlocking_matrix
+
+__all__ = ["Verdict", "check", "RANK_RTOL", "RANK_MARGIN", "LP_TOL", "MOVING_RTOL", "DENSE_COLUMNS"]
+
+#: A singular value at most ``RANK_RTOL * sigma_max`` is zero ...
+RANK_RTOL = 1e-9
+#: ... one at least ``RANK_MARGIN * RANK_RTOL * sigma_max`` is not; in between the rank is inconclusive.
+RANK_MARGIN = 1e3
+#: LP feasibility and optimality tolerance (entries of A are O(1)).
+LP_TOL = 1e-7
+#: Blocks whose twist is below this fraction of the largest one do not move.
+MOVING_RTOL = 1e-6
+#: Up to this many columns the rank comes from a dense SVD; above, from sparse shift-invert eigensolves.
+DENSE_COLUMNS = 3000
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """The answer of :func:`check`.
+
+    ``interlocked`` is True (proved infinitesimally interlocked, hence
+    interlocked by Prop. 3.10), False (a first-order motion exists: *not
+    infinitesimally interlocked* — which does not by itself show that blocks
+    can really move, see DESIGN.md) or None when the floating-point evidence is
+    inconclusive.
+    """
+
+    interlocked: bool | None
+    status: str
+    frame: tuple[int, ...]
+    shape: tuple[int, int]
+    rank: int
+    lp_value: float | None
+    motion: np.ndarray | None = None  # (n_blocks, 6): twist (omega, t) per block, zero for fixed ones
+    motion_kind: str | None = None  # "sliding" (A x = 0) or "opening" (A x >= 0, A x != 0)
+    moving: tuple[int, ...] = ()
+    stress: np.ndarray | None = None  # one positive weight per row of A, A^T stress = 0
+    certified: bool = False
+    translational: bool = False
+    contacts: int = 0
+    tolerances: dict = field(default_factory=dict)
+    timings: dict = field(default_factory=dict)
+
+    def __str__(self) -> str:
+        word = {True: "interlocked", False: "not infinitesimally interlocked", None: "inconclusive"}[self.interlocked]
+        cert = ", certified" if self.certified else ""
+        return f"{word}{cert}: {self.status} (A {self.shape[0]}x{self.shape[1]}, rank {self.rank})"
+
+    def to_dict(self) -> dict:
+        """JSON-serialisable summary."""
+        return {
+            "interlocked": self.interlocked,
+            "status": self.status,
+            "frame": list(self.frame),
+            "shape": list(self.shape),
+            "rank": self.rank,
+            "lp_value": self.lp_value,
+            "moving": list(self.moving),
+            "motion_kind": self.motion_kind,
+            "motion": None if self.motion is None else self.motion.tolist(),
+            "stress_min": None if self.stress is None else float(self.stress.min()),
+            "certified": self.certified,
+            "translational": self.translational,
+            "contacts": self.contacts,
+            "tolerances": dict(self.tolerances),
+            "timings": dict(self.timings),
+        }
+
+
+def check(assembly: Assembly, frame=None, translational: bool = False, certify: bool = False, *,
+          rank_rtol: float = RANK_RTOL, lp_tol: float = LP_TOL, contacts=None) -> Verdict:
+    """Decide whether the assembly is infinitesimally interlocked with the given frame.
+
+    The assembly is infinitesimally interlocked (Def. 3.3) iff ``{x : A x >= 0} = {0}``
+    for its interlocking matrix ``A``, i.e. iff both
+
+    1. ``A^T w = 0`` has a solution ``w >= 1`` (a positive self-stress; by
+       Stiemke's lemma, iff no ``x`` has ``A x >= 0, A x != 0``), and
+    2. ``A`` has full column rank (no sliding motion ``A x = 0``).
+
+    Both tests always run: an LP optimum of 0 with a rank deficit is *not*
+    interlocked.  When (1) fails, the LP ``max 1^T A x, 0 <= A x <= 1`` gives a
+    motion; when (2) fails, the kernel does.
+
+    Parameters
+    ----------
+    assembly : Assembly
+    frame : iterable of int, optional
+        Fixed blocks; ``assembly.frame`` when omitted.  An empty frame is
+        legal for a finite assembly and never interlocked.
+    translational : bool
+        Only translations (infinitesimal translational interlocking).
+    certify : bool
+        Re-check the verdict rigorously (:mod:`interlock.verify.certify`).
+    rank_rtol, lp_tol : float
+        Tolerances (see :data:`RANK_RTOL`, :data:`LP_TOL`); reported in the verdict.
+
+    Notes
+    -----
+    The stress LP is solved by HiGHS' interior-point method, the motion LP by
+    its simplex; the rank by a dense SVD up to :data:`DENSE_COLUMNS` columns
+    and by shift-invert Lanczos on ``A^T A`` above.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> from interlock.blocks import Assembly
+    >>> grid = [trimesh.creation.box(bounds=[[x, y, 0], [x + 1, y + 1, 1]]) for x in range(3) for y in range(3)]
+    >>> v = check(Assembly.from_meshes(grid), frame=[0, 1, 2, 3, 5, 6, 7, 8])
+    >>> v.interlocked, v.rank, v.moving, np.round(v.motion[4], 6).tolist()
+    (False, 5, (4,), [0.0, 0.0, 0.0, 0.0, 0.0, 1.0])
+    """
+    if not isinstance(assembly, Assembly):
+        raise InterlockError(f"check needs an Assembly (see interlock.blocks.Assembly), got {type(assembly).__name__}")
+    if len(assembly) == 0:
+        raise InterlockError("the assembly has no blocks; there is nothing to check")
+    timings = {}
+    start = time.perf_counter()
+    found = find_contacts(assembly) if contacts is None else tuple(contacts)
+    timings["contacts"] = time.perf_counter() - start
+    start = time.perf_counter()
+    A = interlocking_matrix(assembly, frame, translational, contacts=found)
+    timings["matrix"] = time.perf_counter() - start
+    fixed = tuple(sorted(set(range(len(assembly))) - set(A.free.tolist())))
+    tolerances = {"rank_rtol": rank_rtol, "rank_margin": RANK_MARGIN, "lp_tol": lp_tol, "moving_rtol": MOVING_RTOL,
+                  "length_scale": A.length_scale}
+    base = dict(frame=fixed, shape=A.shape, translational=translational, contacts=len(found),
+                tolerances=tolerances, timings=timings)
+    if len(A.free) == 0:
+        return Verdict(True, "every block is in the frame: nothing can move", rank=0, lp_value=0.0, **base)
+
+    start = time.perf_counter()
+    rank, kernel, rank_clear = _rank(A.matrix, rank_rtol)
+    timings["rank"] = time.perf_counter() - start
+    start = time.perf_counter()
+    stress = _positive_stress(A.matrix, lp_tol)
+    lp_value, lp_motion = (0.0, None) if stress is not None else _motion_lp(A.matrix, lp_tol)
+    timings["lp"] = time.perf_counter() - start
+
+    n = A.shape[1]
+    no_frame = " (no frame: a finite assembly without fixed blocks can always move as a whole)" if not fixed else ""
+    if rank_clear and rank < n:
+        motion, moving = _motion(A, kernel[:, 0], len(assembly), reversible=True)
+        verdict = Verdict(False, f"{_names(moving)} a first-order motion that keeps every contact "
+                          f"(A x = 0, kernel dimension {n - rank}){no_frame}", rank=rank, lp_value=lp_value,
+                          motion=motion, motion_kind="sliding", moving=moving, stress=stress, **base)
+    elif stress is not None and rank_clear:
+        verdict = Verdict(True, f"positive self-stress on all {A.shape[0]} rows and full column rank",
+                          rank=rank, lp_value=0.0, stress=stress, **base)
+    elif stress is None and lp_value is not None and lp_value > lp_tol:
+        motion, moving = _motion(A, lp_motion, len(assembly), reversible=False)
+        verdict = Verdict(False, f"{_names(moving)} a first-order motion that opens contacts "
+                          f"(LP value {lp_value:.3g}){no_frame}", rank=rank, lp_value=lp_value,
+                          motion=motion, motion_kind="opening", moving=moving, **base)
+    else:
+        why = "the rank is within the tolerance band" if not rank_clear else "the LPs found neither a stress nor a motion"
+        verdict = Verdict(None, f"floating point is not conclusive: {why}", rank=rank, lp_value=lp_value,
+                          stress=stress, **base)
+    if certify:
+        from interlock.verify.certify import certify_verdict
+
+        start = time.perf_counter()
+        verdict = certify_verdict(assembly, A, verdict)
+        timings["certify"] = time.perf_counter() - start
+    return verdict
+
+
+# --- numerics ---------------------------------------------------------------------
+
+
+def _rank(A: sp.csr_matrix, rtol: float):
+    """(numerical rank, kernel basis as columns, whether the rank is clear of the tolerance band)."""
+    m, n = A.shape
+    if m == 0:
+        return 0, np.eye(n), True
+    if n <= DENSE_COLUMNS:
+        _, sigma, vt = scipy.linalg.svd(A.toarray(), full_matrices=m < n)
+        sigma = np.concatenate([sigma, np.zeros(n - len(sigma))])
+        top = sigma.max(initial=0.0) or 1.0
+        zero = sigma <= rtol * top
+        clear = not np.any((sigma > rtol * top) & (sigma < RANK_MARGIN * rtol * top))
+        return int((~zero).sum()), vt[zero].T, clear
+    gram = (A.T @ A).tocsc()
+    top = float(scipy.sparse.linalg.eigsh(gram, k=1, which="LA", return_eigenvectors=False)[0])
+    k = min(12, n - 1)
+    values, vectors = scipy.sparse.linalg.eigsh(gram, k=k, sigma=-1e-10 * top, which="LM")
+    sigma = np.sqrt(np.clip(values, 0, None))
+    threshold = max(rtol, 1e-7) * np.sqrt(top)  # A^T A resolves singular values down to ~1e-8 relative
+    zero = sigma <= threshold
+    clear = not np.any((sigma > threshold) & (sigma < RANK_MARGIN * threshold))
+    return int(n - zero.sum()), vectors[:, zero], clear
+
+
+def _positive_stress(A: sp.csr_matrix, tol: float):
+    """``w >= 1`` with ``A^T w = 0`` (Stiemke), or None when the LP finds none."""
+    m = A.shape[0]
+    if m == 0:
+        return None
+    result = scipy.optimize.linprog(np.ones(m), A_eq=A.T.tocsr(), b_eq=np.zeros(A.shape[1]), bounds=(1, None),
+                                    method="highs-ipm", options={"primal_feasibility_tolerance": tol,
+                                                                 "dual_feasibility_tolerance": tol})
+    if result.status != 0:
+        return None
+    w = result.x
+    residual = np.abs(A.T @ w).max(initial=0.0)
+    if w.min() < 1 - tol or residual > tol * np.abs(w).max():
+        return None
+    return w
+
+
+def _motion_lp(A: sp.csr_matrix, tol: float):
+    """``max 1^T A x`` subject to ``0 <= A x <= 1``: (value, x)."""
+    m, n = A.shape
+    if m == 0:
+        return 0.0, np.zeros(n)
+    objective = -np.asarray(A.sum(axis=0)).ravel()
+    result = scipy.optimize.linprog(objective, A_ub=sp.vstack([A, -A]).tocsr(),
+                                    b_ub=np.concatenate([np.ones(m), np.zeros(m)]),
+                                    bounds=(None, None), method="highs-ds",
+                                    options={"primal_feasibility_tolerance": tol})
+    if result.status != 0:
+        return None, None
+    return float(-result.fun), result.x
+
+
+def _motion(A: InterlockingMatrix, x, blocks: int, reversible: bool):
+    """A column vector as per-block twists, normalised to a largest velocity scale of 1, and who moves.
+
+    A kernel motion (``reversible``) is signed so that its largest translation
+    component is positive, for reproducible output; an LP motion keeps its sign.
+    """
+    twists = A.twists(x)
+    size = np.maximum(np.linalg.norm(twists[:, :3], axis=1) * A.length_scale, np.linalg.norm(twists[:, 3:], axis=1))
+    top = size.max()
+    if top > 0:
+        twists = twists / top
+        size = size / top
+    motion = np.zeros((blocks, 6))
+    motion[A.free] = twists
+    moving = tuple(int(b) for b in A.free[size > MOVING_RTOL])
+    flat = motion[:, 3:].ravel()
+    if reversible and flat.size and flat[np.argmax(np.abs(flat))] < 0:
+        motion = -motion
+    return motion, moving
+
+
+def _names(blocks) -> str:
+    """'block 4 has' / 'blocks 0, 1 and 2 have' (at most 8 listed)."""
+    if len(blocks) == 1:
+        return f"block {blocks[0]} has"
+    shown = ", ".join(map(str, blocks[:8]))
+    more = f" and {len(blocks) - 8} more" if len(blocks) > 8 else ""
+    return f"blocks {shown}{more} have"

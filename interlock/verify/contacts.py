@@ -1,0 +1,473 @@
+"""Face-to-face contacts between the blocks of an assembly (main paper Def. 3.3)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from numbers import Real
+
+import numpy as np
+import shapely
+import trimesh
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
+
+from interlock.blocks.assembly import NEIGHBOUR_RTOL, Assembly
+from interlock.errors import InterlockError
+
+__all__ = [
+    "Contact",
+    "ContactError",
+    "Facets",
+    "contacts",
+    "facets",
+    "DEFAULT_CONTACT_RTOL",
+    "DEFAULT_ANGLE_TOL",
+    "DEFAULT_AREA_RTOL",
+]
+
+#: Distance tolerance relative to the model size: two planes closer than this
+#: coincide, a gap narrower than this is a contact, an overlap thinner than this
+#: is an edge touch, and facet outlines are simplified within it.  Mesh files
+#: from CAD tools are often accurate to a few 1e-6 only (TopoLite's ``ania``).
+DEFAULT_CONTACT_RTOL = 1e-5
+#: Angle tolerance (radians): normals within it are parallel (facets) or
+#: opposite (contacts).  Rotated pieces in files may be off by ~4e-5 rad (``ania``).
+DEFAULT_ANGLE_TOL = 1e-4
+#: Contact polygons of area at most this times the model size squared are dropped.
+DEFAULT_AREA_RTOL = 1e-10
+
+# Floor for tolerances of zero in the spatial index (relative; keeps its metric finite).
+_TINY = 1e-15
+
+
+class ContactError(InterlockError):
+    """Input that :func:`contacts` cannot work with (not an assembly, bad tolerances)."""
+
+
+@dataclass(frozen=True, eq=False)
+class Contact:
+    """One face-to-face contact polygon between blocks ``i < j`` (one row group of Def. 3.3).
+
+    Attributes
+    ----------
+    i, j : int
+        The blocks in contact, ``i < j``.
+    normal : array (3,)
+        Unit normal pointing from block ``i`` towards block ``j`` (block ``i``'s
+        outward facet normal).
+    vertices : array (k, 3)
+        The overlap polygon on block ``i``'s facet plane: the exterior ring
+        (counter-clockwise about ``normal``, no closing repeat), then each hole
+        ring.  Every vertex gives rows of the interlocking matrix.
+    area : float
+        Area of the polygon.
+    facet_i, facet_j : int
+        Indices of the touching facets in :func:`facets` of each block.
+    polygon : shapely.Polygon
+        The polygon in 2D plane coordinates: ``origin + x * basis[0] + y * basis[1]``.
+    origin : array (3,)
+        A point of the plane (the centroid of block ``i``'s facet).
+    basis : array (2, 3)
+        Orthonormal in-plane vectors with ``basis[0] x basis[1] = normal``.
+    """
+
+    i: int
+    j: int
+    normal: np.ndarray
+    vertices: np.ndarray
+    area: float
+    facet_i: int
+    facet_j: int
+    polygon: shapely.Polygon = field(repr=False)
+    origin: np.ndarray = field(repr=False)
+    basis: np.ndarray = field(repr=False)
+
+    @property
+    def ring_sizes(self) -> tuple[int, ...]:
+        """Vertex counts of the exterior ring and of each hole, in the order of :attr:`vertices`."""
+        rings = [self.polygon.exterior, *self.polygon.interiors]
+        return tuple(len(ring.coords) - 1 for ring in rings)
+
+    def __str__(self) -> str:
+        n = ", ".join(f"{x:.3g}" for x in self.normal)
+        holes = len(self.ring_sizes) - 1
+        extra = f" with {holes} hole(s)" if holes else ""
+        return (f"contact {self.i}-{self.j}: {len(self.vertices)} vertices{extra}, area {self.area:.6g}, "
+                f"normal ({n}), facets {self.facet_i}/{self.facet_j}")
+
+    def to_dict(self) -> dict:
+        """JSON-serialisable form; ``ring_sizes`` splits ``vertices`` into exterior and holes."""
+        return {"i": self.i, "j": self.j, "normal": self.normal.tolist(), "vertices": self.vertices.tolist(),
+                "ring_sizes": list(self.ring_sizes), "area": self.area, "facet_i": self.facet_i,
+                "facet_j": self.facet_j, "origin": self.origin.tolist(), "basis": self.basis.tolist()}
+
+
+@dataclass(frozen=True, eq=False)
+class Facets:
+    """The planar facets of a triangle mesh: maximal edge-connected sets of coplanar triangles.
+
+    Facet ``f`` is the polygon ``polygons[f]`` (2D, possibly non-convex, with
+    holes) placed by ``origins[f] + x * bases[f, 0] + y * bases[f, 1]``; its
+    outward normal is ``normals[f] = bases[f, 0] x bases[f, 1]``; ``faces[f]``
+    lists its triangles.  Facets are ordered by their lowest triangle index.
+    """
+
+    normals: np.ndarray
+    origins: np.ndarray
+    bases: np.ndarray
+    polygons: np.ndarray
+    faces: tuple[np.ndarray, ...]
+
+    def __len__(self) -> int:
+        return len(self.normals)
+
+    @property
+    def areas(self) -> np.ndarray:
+        return shapely.area(self.polygons)
+
+
+def contacts(assembly: Assembly, rtol: float = DEFAULT_CONTACT_RTOL, angle_tol: float = DEFAULT_ANGLE_TOL,
+             area_rtol: float = DEFAULT_AREA_RTOL) -> tuple[Contact, ...]:
+    """All face-to-face contacts between the blocks of an assembly.
+
+    Two blocks are in contact where a facet of one and a facet of the other
+    lie in a common plane with opposite outward normals and overlap in a region
+    of positive area.  Each connected part of such an overlap is one
+    :class:`Contact`; its vertices and normal give the rows of the
+    infinitesimal interlocking matrix (main paper Def. 3.3).  Only
+    face-to-face contacts are found: blocks touching along an edge or at a
+    corner give none (Remark 3.11).
+
+    Parameters
+    ----------
+    assembly : Assembly
+        The blocks (closed triangle meshes; polygonal faces may be triangulated).
+    rtol : float, optional
+        Distance tolerance relative to ``assembly.scale`` (default
+        ``DEFAULT_CONTACT_RTOL`` = 1e-5): facet planes whose offsets differ by at
+        most ``rtol * scale`` coincide (so a gap that narrow still counts as a
+        contact); overlaps thinner than it (twice the area over the perimeter)
+        are edge touches and are dropped; outlines are simplified within it.
+    angle_tol : float, optional
+        Angle tolerance in radians (default ``DEFAULT_ANGLE_TOL`` = 1e-4) for
+        opposite normals and for grouping triangles into facets.
+    area_rtol : float, optional
+        Overlaps of area at most ``area_rtol * scale**2`` are dropped (default
+        ``DEFAULT_AREA_RTOL`` = 1e-10).
+
+    Returns
+    -------
+    tuple of Contact
+        Sorted by ``(i, j, facet_i, facet_j)``.
+
+    Raises
+    ------
+    ContactError
+        If ``assembly`` is not an :class:`~interlock.blocks.Assembly` or a
+        tolerance is negative or not finite (or ``angle_tol >= pi / 2``).
+
+    See Also
+    --------
+    facets : the planar facets of one mesh, which ``facet_i`` and ``facet_j`` index.
+
+    Notes
+    -----
+    Candidate pairs are the edges of ``assembly.neighbours`` (a spatial index on
+    bounding boxes; :meth:`~Assembly.neighbour_graph` with ``rtol`` when it is
+    larger), never all pairs.  Facets are computed once per block type and
+    moved rigidly (mirror images included).  Per candidate pair, facets with
+    opposite normals in coincident planes are matched through a k-d tree on
+    (normal, plane offset), so the cost is ``O((F_i + F_j) log F)`` plus the
+    matches, not ``O(F_i F_j)``.  Block ``j``'s facet is mapped into the 2D
+    frame of block ``i``'s facet and all matched pairs are intersected at once
+    with shapely (non-convex facets, holes and multi-part overlaps are
+    handled).  Contact vertices lie on block ``i``'s facet plane.
+
+    Examples
+    --------
+    >>> cubes = [trimesh.creation.box(bounds=[[x, 0, 0], [x + 1, 1, 1]]) for x in range(3)]
+    >>> found = contacts(Assembly.from_meshes(cubes))
+    >>> [(c.i, c.j, round(c.area, 9), c.normal.round(9).tolist()) for c in found]
+    [(0, 1, 1.0, [1.0, 0.0, 0.0]), (1, 2, 1.0, [1.0, 0.0, 0.0])]
+    >>> print(found[0])
+    contact 0-1: 4 vertices, area 1, normal (1, 0, 0), facets 5/0
+    """
+    if not isinstance(assembly, Assembly):
+        raise ContactError(f"contacts() needs an interlock Assembly, got {type(assembly).__name__}; "
+                           "build one with Assembly.from_meshes or Assembly.load")
+    rtol = _tolerance("rtol", rtol)
+    angle_tol = _tolerance("angle_tol", angle_tol)
+    area_rtol = _tolerance("area_rtol", area_rtol)
+    if angle_tol >= math.pi / 2:
+        raise ContactError(f"angle_tol must be below pi/2 radians, got {angle_tol}")
+    if len(assembly) < 2:
+        return ()
+    scale = assembly.scale
+    graph = assembly.neighbours if rtol <= NEIGHBOUR_RTOL else assembly.neighbour_graph(rtol)
+    pairs = np.array(sorted((min(u, v), max(u, v)) for u, v in graph.edges if u != v), dtype=int).reshape(-1, 2)
+    if not len(pairs):
+        return ()
+    table = _FacetTable(assembly, rtol * scale, angle_tol)
+    gi, gj = _matches(table, pairs, rtol * scale, angle_tol, scale)
+    return _overlaps(table, gi, gj, rtol * scale, area_rtol * scale**2)
+
+
+def facets(mesh: trimesh.Trimesh, atol: float | None = None, angle_tol: float = DEFAULT_ANGLE_TOL) -> Facets:
+    """The planar facets of a triangle mesh (polygonal faces that a file format triangulated).
+
+    Adjacent triangles (sharing an edge, after merging duplicate vertices)
+    belong to one facet when their normals agree within ``angle_tol`` or the
+    smaller one's far vertex lies within ``atol`` of the larger one's plane; a
+    group that is not flat within ``atol`` (a finely tessellated curved
+    surface) falls apart into its triangles.  A triangle in no group is a facet
+    of its own.  Degenerate triangles are left out.
+
+    Parameters
+    ----------
+    mesh : trimesh.Trimesh
+        An outward-oriented triangle mesh.
+    atol : float, optional
+        Distance tolerance; default ``DEFAULT_CONTACT_RTOL * mesh.scale``.
+    angle_tol : float, optional
+        Angle tolerance in radians.
+
+    Returns
+    -------
+    Facets
+
+    Examples
+    --------
+    >>> f = facets(trimesh.creation.box())
+    >>> len(f), f.areas.round(12).tolist()
+    (6, [1.0, 1.0, 1.0, 1.0, 1.0, 1.0])
+    """
+    if not isinstance(mesh, trimesh.Trimesh):
+        raise ContactError(f"facets() needs a trimesh.Trimesh, got {type(mesh).__name__}")
+    mesh = mesh.copy()
+    mesh.merge_vertices(merge_tex=True, merge_norm=True)
+    atol = DEFAULT_CONTACT_RTOL * mesh.scale if atol is None else _tolerance("atol", atol)
+    return _facets(mesh, atol, _tolerance("angle_tol", angle_tol))
+
+
+# --- private helpers ----------------------------------------------------------------------------
+
+
+def _tolerance(name, value) -> float:
+    if isinstance(value, bool) or not isinstance(value, Real) or not math.isfinite(value) or value < 0:
+        raise ContactError(f"{name} must be a finite number >= 0, got {value!r}")
+    return float(value)
+
+
+def _facets(mesh: trimesh.Trimesh, atol: float, angle_tol: float) -> Facets:
+    tri = mesh.triangles
+    cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    twice_area = np.linalg.norm(cross, axis=1)
+    good = twice_area > np.finfo(float).eps * max(mesh.scale, _TINY) ** 2
+    normal = np.zeros_like(cross)
+    normal[good] = cross[good] / twice_area[good, None]
+
+    # coplanar neighbours: normals agree, or the smaller face's far vertex is on the larger's plane
+    adj = mesh.face_adjacency
+    adj = adj[good[adj].all(axis=1)] if len(adj) else adj.reshape(0, 2)
+    keep = np.zeros(len(adj), dtype=bool)
+    if len(adj):
+        a, b = adj[:, 0], adj[:, 1]
+        angle = 2 * np.arcsin(np.clip(np.linalg.norm(normal[a] - normal[b], axis=1) / 2, 0, 1))
+        big_first = twice_area[a] >= twice_area[b]
+        big, small = np.where(big_first, a, b), np.where(big_first, b, a)
+        unshared = _unshared_vertex(mesh.faces[small], mesh.faces[big])
+        far = np.abs(np.einsum("ij,ij->i", normal[big], mesh.vertices[unshared] - tri[big, 0]))
+        same_side = np.einsum("ij,ij->i", normal[a], normal[b]) > 0
+        keep = same_side & ((angle <= angle_tol) | (far <= atol))
+    n_faces = len(mesh.faces)
+    graph = coo_matrix((np.ones(keep.sum()), (adj[keep, 0], adj[keep, 1])), shape=(n_faces, n_faces))
+    _, label = connected_components(graph, directed=False)
+
+    # groups that are not flat fall apart into single triangles
+    _, label = np.unique(label, return_inverse=True)
+    nrm, org = _planes(label, cross, tri, good)
+    dist = np.abs(np.einsum("fvi,fi->fv", tri - org[label][:, None], nrm[label])).max(axis=1)
+    bent = np.zeros(label.max() + 1, dtype=bool)
+    np.logical_or.at(bent, label[good], dist[good] > atol)
+    split = bent[label]
+    label = np.where(split, label.max() + 1 + np.arange(n_faces), label)
+    label[~good] = -1
+    # number facets by their lowest triangle index
+    used = np.flatnonzero(good)
+    _, first, label_g = np.unique(label[used], return_index=True, return_inverse=True)
+    order = np.argsort(np.argsort(used[first], kind="stable"), kind="stable")
+    label = np.full(n_faces, -1)
+    label[used] = order[label_g]
+    n_facets = len(first)
+    if n_facets == 0:
+        raise ContactError("the mesh has no triangle of positive area")
+    nrm, org = _planes(label[used], cross[used], tri[used], np.ones(len(used), dtype=bool))
+    bases = _bases(nrm)
+
+    # facet outlines: union of the projected triangles
+    lab = label[used]
+    flat = np.einsum("fvi,fai->fva", tri[used] - org[lab][:, None], bases[lab])
+    triangles = shapely.polygons(flat)
+    members = np.argsort(lab, kind="stable")
+    groups = np.split(members, np.cumsum(np.bincount(lab, minlength=n_facets))[:-1])
+    polygons = np.empty(n_facets, dtype=object)
+    for f, group in enumerate(groups):
+        polygons[f] = triangles[group[0]] if len(group) == 1 else shapely.union_all(triangles[group])
+    polygons = _clean(polygons, atol)
+    for array in (nrm, org, bases, polygons):
+        array.setflags(write=False)
+    return Facets(nrm, org, bases, polygons, tuple(used[g] for g in groups))
+
+
+def _unshared_vertex(faces_small, faces_big):
+    """For each pair of adjacent faces, the vertex of the first not in the second."""
+    not_shared = ~(faces_small[:, :, None] == faces_big[:, None, :]).any(axis=2)
+    return faces_small[np.arange(len(faces_small)), not_shared.argmax(axis=1)]
+
+
+def _planes(label, cross, tri, good):
+    """Area-weighted unit normal and centroid per label."""
+    count = label.max() + 1
+    w = np.where(good, np.linalg.norm(cross, axis=1), 0.0)
+    nrm = np.stack([np.bincount(label, cross[:, k] * good, count) for k in range(3)], axis=1)
+    centres = tri.mean(axis=1)
+    total = np.bincount(label, w, count)
+    org = np.stack([np.bincount(label, centres[:, k] * w, count) for k in range(3)], axis=1)
+    org /= np.where(total > 0, total, 1.0)[:, None]
+    length = np.linalg.norm(nrm, axis=1)
+    nrm /= np.where(length > 0, length, 1.0)[:, None]
+    return nrm, org
+
+
+def _bases(normals):
+    """Orthonormal (u, v) per unit normal n with u x v = n."""
+    axis = np.eye(3)[np.argmin(np.abs(normals), axis=1)]
+    u = np.cross(normals, axis)
+    u /= np.linalg.norm(u, axis=1)[:, None]
+    return np.stack([u, np.cross(normals, u)], axis=1)
+
+
+def _clean(polygons, atol):
+    """Drop near-collinear and near-duplicate vertices; exterior rings counter-clockwise."""
+    polygons = shapely.simplify(shapely.normalize(polygons), atol, preserve_topology=True)
+    if hasattr(shapely, "orient_polygons"):
+        return shapely.orient_polygons(polygons)
+    from shapely.geometry.polygon import orient  # shapely < 2.1
+
+    return np.array([orient(p) if p.geom_type == "Polygon" else p for p in polygons], dtype=object)
+
+
+class _FacetTable:
+    """The facets of every block in world coordinates, concatenated block after block."""
+
+    def __init__(self, assembly: Assembly, atol: float, angle_tol: float):
+        types = assembly.types
+        per_type = {}
+        for t in np.unique(types):
+            mesh = assembly.meshes[t].copy()
+            mesh.merge_vertices(merge_tex=True, merge_norm=True)
+            per_type[t] = _facets(mesh, atol, angle_tol)
+        counts = np.array([len(per_type[t]) for t in types])
+        self.start = np.concatenate([[0], np.cumsum(counts)])
+        total = self.start[-1]
+        self.block = np.repeat(np.arange(len(types)), counts)
+        self.local = np.arange(total) - self.start[self.block]
+        self.normals, self.origins = np.empty((total, 3)), np.empty((total, 3))
+        self.bases, self.polygons = np.empty((total, 2, 3)), np.empty(total, dtype=object)
+        rot, shift = assembly.transforms[:, :3, :3], assembly.transforms[:, :3, 3]
+        mirrored = assembly.mirrored
+        for t, f in per_type.items():
+            for mirror in (False, True):
+                blocks = np.flatnonzero((types == t) & (mirrored == mirror))
+                if not len(blocks):
+                    continue
+                rows = (self.start[blocks][:, None] + np.arange(len(f))).ravel()
+                r = rot[blocks]
+                self.normals[rows] = np.einsum("bij,fj->bfi", r, f.normals).reshape(-1, 3)
+                self.origins[rows] = (np.einsum("bij,fj->bfi", r, f.origins) + shift[blocks, None]).reshape(-1, 3)
+                bases = np.einsum("bij,fkj->bfki", r, f.bases).reshape(-1, 2, 3)
+                polygons = f.polygons
+                if mirror:  # keep u x v = n: flip v, and y in the plane
+                    bases[:, 1] *= -1
+                    polygons = _clean(shapely.transform(polygons, lambda xy: xy * [1.0, -1.0]), 0.0)
+                self.bases[rows] = bases
+                self.polygons[rows] = np.tile(polygons, len(blocks))
+
+
+def _matches(table: _FacetTable, pairs, atol, angle_tol, scale):
+    """Global facet indices (gi, gj) of coplanar facets with opposite normals, blocks i < j."""
+    lo, hi = table.origins.min(axis=0), table.origins.max(axis=0)
+    centre = (lo + hi) / 2
+    reach = max(scale, float(np.linalg.norm(hi - lo)))
+    # |n_i + n_j| <= angle_tol and |d_i + d_j| <= atol + angle_tol * reach / 2 for offsets d = n.(o - centre)
+    a = max(angle_tol, _TINY)
+    t = max(atol + angle_tol * reach, _TINY * scale)
+    offset = np.einsum("fi,fi->f", table.normals, table.origins - centre)
+    points = np.hstack([table.normals / a, offset[:, None] / t])
+    radius = math.sqrt(2) * (1 + 1e-9)
+    trees, gi, gj = {}, [], []
+    for i, j in pairs:
+        si, sj = slice(table.start[i], table.start[i + 1]), slice(table.start[j], table.start[j + 1])
+        if i not in trees:
+            trees[i] = cKDTree(points[si])
+        hits = trees[i].query_ball_point(-points[sj], radius)
+        sizes = np.fromiter(map(len, hits), dtype=int, count=len(hits))
+        if sizes.sum():
+            gi.append(table.start[i] + np.concatenate([h for h in hits if h]).astype(int))
+            gj.append(table.start[j] + np.repeat(np.arange(len(hits)), sizes))
+    if not gi:
+        return np.zeros(0, dtype=int), np.zeros(0, dtype=int)
+    gi, gj = np.concatenate(gi), np.concatenate(gj)
+    ni, nj = table.normals[gi], table.normals[gj]
+    angle = 2 * np.arcsin(np.clip(np.linalg.norm(ni + nj, axis=1) / 2, 0, 1))
+    gap = table.origins[gj] - table.origins[gi]
+    ok = ((angle <= angle_tol) & (np.abs(np.einsum("ki,ki->k", ni, gap)) <= atol)
+          & (np.abs(np.einsum("ki,ki->k", nj, gap)) <= atol))
+    return gi[ok], gj[ok]
+
+
+def _overlaps(table: _FacetTable, gi, gj, atol, area_tol) -> tuple[Contact, ...]:
+    """Intersect matched facets in block i's facet frame; one Contact per overlap part."""
+    if not len(gi):
+        return ()
+    bi, bj = table.bases[gi], table.bases[gj]
+    linear = np.einsum("kar,kbr->kab", bi, bj)  # j's plane coordinates -> i's
+    shift = np.einsum("kar,kr->ka", bi, table.origins[gj] - table.origins[gi])
+    moved = table.polygons[gj].copy()
+    xy, which = shapely.get_coordinates(moved, return_index=True)
+    moved = shapely.set_coordinates(moved, np.einsum("kab,kb->ka", linear[which], xy) + shift[which])
+    overlap = shapely.intersection(table.polygons[gi], moved)
+    parts, k = shapely.get_parts(overlap, return_index=True)
+    polygonal = shapely.get_type_id(parts) == 3
+    parts, k = _clean(parts[polygonal], atol), k[polygonal]
+    polygonal = shapely.get_type_id(parts) == 3  # simplification may collapse slivers
+    parts, k = parts[polygonal], k[polygonal]
+    area, perimeter = shapely.area(parts), shapely.length(parts)
+    keep = (area > area_tol) & (2 * area > atol * perimeter)
+    parts, k, area = parts[keep], k[keep], area[keep]
+    if not len(parts):
+        return ()
+    # 3D vertices: every ring without its closing repeat
+    rings, ring_part = shapely.get_rings(parts, return_index=True)
+    xy, ring = shapely.get_coordinates(rings, return_index=True)
+    last = np.r_[ring[1:] != ring[:-1], True]
+    xy, ring = xy[~last], ring[~last]
+    part = ring_part[ring]
+    g = gi[k[part]]
+    points = table.origins[g] + np.einsum("va,var->vr", xy, table.bases[g])
+    per_part = np.split(points, np.cumsum(np.bincount(part, minlength=len(parts)))[:-1])
+    block_i, block_j = table.block[gi[k]], table.block[gj[k]]
+    facet_i, facet_j = table.local[gi[k]], table.local[gj[k]]
+    order = np.lexsort((np.arange(len(parts)), facet_j, facet_i, block_j, block_i))
+    found = []
+    for p in order:
+        g_i = gi[k[p]]
+        arrays = [table.normals[g_i].copy(), per_part[p], table.origins[g_i].copy(), table.bases[g_i].copy()]
+        for array in arrays:
+            array.setflags(write=False)
+        normal, vertices, origin, basis = arrays
+        found.append(Contact(int(block_i[p]), int(block_j[p]), normal, vertices, float(area[p]),
+                             int(facet_i[p]), int(facet_j[p]), parts[p], origin, basis))
+    return tuple(found)

@@ -1,0 +1,322 @@
+"""Face-to-face contacts (main paper Def. 3.3; only face pairs, Remark 3.11)."""
+
+import io
+import json
+import math
+import re
+
+import networkx as nx
+import numpy as np
+import pytest
+import shapely
+import trimesh
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from interlock import InterlockError
+from interlock.blocks.assembly import Assembly
+from interlock.verify.contacts import (DEFAULT_ANGLE_TOL, DEFAULT_CONTACT_RTOL, Contact, ContactError, contacts,
+                                       facets)
+
+#: Recorded on the reference data (areas positive, normals opposite, vertices on both
+#: facets, every contact checked against a brute-force triangle-by-triangle overlap).
+BUNNY_CONTACTS, BUNNY_PAIRS, BUNNY_AREA = 1135, 447, 5.78515625
+ANIA_CONTACTS = 6
+
+
+def box(lo, hi):
+    return trimesh.creation.box(bounds=[lo, hi])
+
+
+def cube(x, y, z=0.0, side=1.0):
+    return box([x, y, z], [x + side, y + side, z + side])
+
+
+def prism(polygon, z0=0.0, height=1.0):
+    mesh = trimesh.creation.extrude_polygon(polygon, height)
+    return mesh.apply_translation([0, 0, z0])
+
+
+def grid_3x3():
+    return Assembly.from_meshes([cube(x, y) for x in range(3) for y in range(3)])
+
+
+def check_geometry(assembly, found, atol=1e-9):
+    """Facts every contact must satisfy: i < j, unit normal i->j, vertices on both facet planes."""
+    fac = [facets(assembly.mesh(i)) for i in range(len(assembly))]
+    for c in found:
+        assert c.i < c.j and c.area > 0
+        assert np.linalg.norm(c.normal) == pytest.approx(1)
+        np.testing.assert_allclose(c.normal, fac[c.i].normals[c.facet_i], atol=1e-9)
+        np.testing.assert_allclose(c.normal, -fac[c.j].normals[c.facet_j], atol=DEFAULT_ANGLE_TOL)
+        for f, k in ((fac[c.i], c.facet_i), (fac[c.j], c.facet_j)):
+            assert np.abs((c.vertices - f.origins[k]) @ f.normals[k]).max() < atol * assembly.scale + 1e-12
+        assert len(c.vertices) == sum(c.ring_sizes)
+        assert c.polygon.area == pytest.approx(c.area)
+        np.testing.assert_allclose(np.cross(*c.basis), c.normal, atol=1e-12)
+    keys = [(c.i, c.j, c.facet_i, c.facet_j) for c in found]
+    assert keys == sorted(keys)
+
+
+# --- the cube grids of Ex. 3.5 -----------------------------------------------------------------
+
+
+def test_example_3_5_grid_has_12_unit_contacts():
+    a = grid_3x3()
+    found = contacts(a)
+    check_geometry(a, found)
+    assert len(found) == 12
+    assert all(c.area == pytest.approx(1) and len(c.vertices) == 4 for c in found)
+    for c in found:  # axis-aligned, pointing from i to j
+        np.testing.assert_allclose(np.abs(c.normal), np.abs(c.normal).round(), atol=1e-12)
+        assert c.normal @ (a.centroids[c.j] - a.centroids[c.i]) == pytest.approx(1)
+    middle = [c for c in found if 4 in (c.i, c.j)]
+    assert len(middle) == 4
+    assert sorted(c.j if c.i == 4 else c.i for c in middle) == [1, 3, 5, 7]
+    # the face contact vertices of the middle cube are the corners of its side faces
+    corners = {tuple(v) for c in middle for v in c.vertices.round(9)}
+    assert corners == {(x, y, z) for x in (1.0, 2.0) for y in (1.0, 2.0) for z in (0.0, 1.0)}
+
+
+def test_edge_and_corner_touches_are_not_contacts():
+    diagonal = Assembly.from_meshes([cube(0, 0), cube(1, 1)])  # common edge only
+    corner = Assembly.from_meshes([cube(0, 0), cube(1, 1, 1)])  # common corner only
+    for a in (diagonal, corner):
+        assert a.neighbours.has_edge(0, 1)
+        assert contacts(a) == ()
+    # in the 3x3 grid the middle cube touches its 4 diagonal neighbours along edges only
+    assert not any({c.i, c.j} in ({0, 4}, {2, 4}, {4, 6}, {4, 8}) for c in contacts(grid_3x3()))
+
+
+def test_half_offset_cubes():
+    a = Assembly.from_meshes([cube(0, 0), cube(1, 0.5)])
+    (c,) = contacts(a)
+    assert c.area == pytest.approx(0.5)
+    np.testing.assert_allclose(c.normal, [1, 0, 0], atol=1e-12)
+    assert sorted(map(tuple, c.vertices.round(9))) == [(1, 0.5, 0), (1, 0.5, 1), (1, 1, 0), (1, 1, 1)]
+
+
+def test_cube_on_larger_slab():
+    a = Assembly.from_meshes([box([-2, -3, -1], [4, 3, 0]), cube(0.25, 0.5, 0)])
+    (c,) = contacts(a)
+    assert (c.i, c.j) == (0, 1) and c.area == pytest.approx(1)
+    np.testing.assert_allclose(c.normal, [0, 0, 1], atol=1e-12)
+    np.testing.assert_allclose(c.vertices[:, 2], 0, atol=1e-12)
+    # the other way round: the normal still points from the lower index to the higher
+    (d,) = contacts(Assembly.from_meshes([cube(0.25, 0.5, 0), box([-2, -3, -1], [4, 3, 0])]))
+    np.testing.assert_allclose(d.normal, [0, 0, -1], atol=1e-12)
+
+
+# --- non-convex overlaps, several parts, holes ----------------------------------------------
+
+
+def test_l_prism_against_box_gives_nonconvex_overlap():
+    ell = shapely.Polygon([(0, 0), (2, 0), (2, 1), (1, 1), (1, 2), (0, 2)])
+    a = Assembly.from_meshes([prism(ell), box([0.5, 0.5, 1], [2, 2, 2])])
+    found = contacts(a)
+    check_geometry(a, found)
+    (c,) = found
+    assert c.area == pytest.approx(0.75 + 0.5)
+    assert c.polygon.convex_hull.area > c.area + 0.1  # genuinely non-convex
+    assert len(c.vertices) == 6
+    np.testing.assert_allclose(c.normal, [0, 0, 1], atol=1e-12)
+
+
+def test_u_prism_against_box_gives_two_contacts():
+    u = shapely.Polygon([(0, 0), (3, 0), (3, 3), (2, 3), (2, 1), (1, 1), (1, 3), (0, 3)])
+    a = Assembly.from_meshes([prism(u), box([0, 2, 1], [3, 3, 2])])
+    found = contacts(a)
+    check_geometry(a, found)
+    assert len(found) == 2 and len({(c.facet_i, c.facet_j) for c in found}) == 1
+    assert [c.area for c in found] == pytest.approx([1, 1])
+
+
+def test_overlap_with_a_hole_keeps_the_hole_vertices():
+    frame = shapely.box(0, 0, 3, 3).difference(shapely.box(1, 1, 2, 2))
+    a = Assembly.from_meshes([prism(frame), box([-1, -1, 1], [4, 4, 2])])
+    (c,) = contacts(a)
+    assert c.area == pytest.approx(8)
+    assert c.ring_sizes == (4, 4) and len(c.vertices) == 8
+    hole = {tuple(v) for v in c.vertices[4:].round(9)}
+    assert hole == {(x, y, 1.0) for x in (1.0, 2.0) for y in (1.0, 2.0)}
+    assert c.to_dict()["ring_sizes"] == [4, 4]
+
+
+# --- tolerances --------------------------------------------------------------------------------
+
+
+def test_gap_against_tolerance():
+    scale = math.sqrt(2**2 + 1 + 1)  # two unit cubes side by side
+    tol = DEFAULT_CONTACT_RTOL * scale
+    assert contacts(Assembly.from_meshes([cube(0, 0), cube(1 + 10 * tol, 0)])) == ()
+    (c,) = contacts(Assembly.from_meshes([cube(0, 0), cube(1 + tol / 10, 0)]))
+    assert c.area == pytest.approx(1)
+    # a wider tolerance finds the wider gap (beyond the cached neighbour graph's padding)
+    (c,) = contacts(Assembly.from_meshes([cube(0, 0), cube(1.001, 0)]), rtol=1e-3)
+    assert c.area == pytest.approx(1) and c.vertices[:, 0] == pytest.approx(1)
+    # an overlap thinner than the tolerance is an edge touch
+    assert contacts(Assembly.from_meshes([cube(0, 0), cube(1, 1 - tol / 10)])) == ()
+
+
+def test_tilted_face_within_angle_tolerance():
+    tilt = trimesh.transformations.rotation_matrix(3e-5, [0, 1, 0], point=[1, 0.5, 0.5])
+    a = Assembly.from_meshes([cube(0, 0), cube(1, 0).apply_transform(tilt)])
+    assert len(contacts(a)) == 1
+    assert contacts(a, angle_tol=1e-5) == ()
+
+
+def test_bad_input():
+    with pytest.raises(ContactError, match="Assembly"):
+        contacts([cube(0, 0), cube(1, 0)])
+    a = grid_3x3()
+    for kwargs in ({"rtol": -1e-6}, {"angle_tol": float("nan")}, {"area_rtol": "0"}, {"rtol": True},
+                   {"angle_tol": 2.0}):
+        with pytest.raises(ContactError) as info:
+            contacts(a, **kwargs)
+        assert isinstance(info.value, InterlockError) and isinstance(info.value, ValueError)
+    with pytest.raises(ContactError, match="Trimesh"):
+        facets("box")
+
+
+def test_small_and_separated_assemblies():
+    assert contacts(Assembly.from_meshes([cube(0, 0)])) == ()
+    assert contacts(Assembly.from_meshes([cube(0, 0), cube(5, 0)])) == ()
+    assert len(contacts(grid_3x3(), rtol=0.0, angle_tol=0.0)) == 12  # exact input needs no slack
+
+
+# --- triangulated and polygonal faces --------------------------------------------------------
+
+
+def test_split_triangles_still_give_one_polygon_per_face_pair():
+    fine = cube(1, 0)
+    for _ in range(3):
+        fine = fine.subdivide()  # 64 triangles per side, vertices along every edge
+    assert len(fine.faces) == 768 and len(facets(fine)) == 6
+    a = Assembly.from_meshes([cube(0, 0), fine, cube(1, 1)])
+    found = contacts(a)
+    check_geometry(a, found)
+    assert [(c.i, c.j) for c in found] == [(0, 1), (1, 2)]
+    assert all(c.area == pytest.approx(1) and len(c.vertices) == 4 for c in found)
+
+
+def test_polygonal_obj_faces():
+    # a hexagonal prism written with two hexagon faces and six quads; trimesh triangulates them
+    ring = [(math.cos(t), math.sin(t)) for t in (np.arange(6) + 0.5) * math.pi / 3]  # a side at x = sqrt(3)/2
+    lines = [f"v {x} {y} {z}" for z in (0, 1) for x, y in ring]
+    lines += ["f 6 5 4 3 2 1", "f 7 8 9 10 11 12"] + [f"f {k + 1} {(k + 1) % 6 + 1} {(k + 1) % 6 + 7} {k + 7}"
+                                                    for k in range(6)]
+    hexagon = trimesh.load(io.StringIO("\n".join(lines)), file_type="obj", force="mesh")
+    assert len(hexagon.faces) == 20 and len(facets(hexagon)) == 8
+    side_box = box([math.sqrt(3) / 2, -0.25, 0], [2, 0.25, 0.9])
+    a = Assembly.from_meshes([hexagon, box([-2, -2, 1], [2, 2, 1.5]), side_box])
+    found = contacts(a)
+    check_geometry(a, found)
+    top, side = found
+    assert (top.i, top.j, side.i, side.j) == (0, 1, 0, 2)
+    assert top.area == pytest.approx(3 * math.sqrt(3) / 2) and len(top.vertices) == 6
+    assert side.area == pytest.approx(0.5 * 0.9) and len(side.vertices) == 4  # the box face, inside a side quad
+    np.testing.assert_allclose(side.normal, [1, 0, 0], atol=1e-12)
+
+
+def test_shared_types_and_mirror_images_match_world_meshes():
+    wedge = prism(shapely.Polygon([(0, 0), (2, 0), (0, 1)]))
+    mirror = np.diag([-1.0, 1, 1, 1])
+    place = [np.eye(4), trimesh.transformations.translation_matrix([0, 0, 1]), mirror,
+             trimesh.transformations.translation_matrix([0, 0, -1]) @ mirror]
+    shared = Assembly([wedge], [0, 0, 0, 0], place)
+    assert shared.mirrored.tolist() == [False, False, True, True]
+    world = Assembly.from_meshes(shared.world_meshes())
+    a, b = contacts(shared), contacts(world)
+    assert [(c.i, c.j) for c in a] == [(0, 1), (0, 2), (2, 3)] and len(b) == 3
+    for c, d in zip(a, b):
+        assert (c.i, c.j, c.facet_i, c.facet_j) == (d.i, d.j, d.facet_i, d.facet_j)
+        assert c.area == pytest.approx(d.area) and c.area == pytest.approx(1)
+        np.testing.assert_allclose(c.normal, d.normal, atol=1e-12)
+        assert sorted(map(tuple, c.vertices.round(9))) == sorted(map(tuple, d.vertices.round(9)))
+    check_geometry(shared, a)
+
+
+# --- results as values ---------------------------------------------------------------------
+
+
+def test_contact_prints_and_serialises():
+    c = contacts(grid_3x3())[0]
+    assert isinstance(c, Contact)
+    assert re.fullmatch(r"contact 0-1: 4 vertices, area 1, normal \(0, 1, 0\), facets \d+/\d+", str(c))
+    data = json.loads(json.dumps(c.to_dict()))
+    assert data["i"] == 0 and data["j"] == 1 and data["area"] == pytest.approx(1)
+    np.testing.assert_allclose(data["vertices"], c.vertices)
+    with pytest.raises(AttributeError):
+        c.area = 2
+    with pytest.raises(ValueError):
+        c.vertices[0, 0] = 5
+
+
+# --- reference data (TopoLite) ---------------------------------------------------------------
+
+
+def _contact_graph(assembly, found):
+    graph = nx.Graph()
+    graph.add_nodes_from(range(len(assembly)))
+    graph.add_edges_from((c.i, c.j) for c in found)
+    return graph
+
+
+def test_topolite_bunny(shared_data):
+    folder = shared_data / "topolite" / "bunny"
+    paths = sorted(folder.glob("part_*.obj"), key=lambda p: int(p.stem.split("_")[1]))
+    assert [p.name for p in paths[:3]] == ["part_1.obj", "part_2.obj", "part_3.obj"] and len(paths) == 80
+    a = Assembly.load(paths)
+    found = contacts(a)
+    check_geometry(a, found)
+    graph = _contact_graph(a, found)
+    assert min(d for _, d in graph.degree) >= 1 and nx.is_connected(graph)
+    assert len(found) == BUNNY_CONTACTS and graph.number_of_edges() == BUNNY_PAIRS
+    assert sum(c.area for c in found) == pytest.approx(BUNNY_AREA)
+    # voxel parts of side 1/16: every contact is a union of voxel faces
+    areas = np.array([c.area for c in found]) * 16**2
+    np.testing.assert_allclose(areas, areas.round(), atol=1e-9)
+
+
+def test_topolite_ania(shared_data):
+    folder = shared_data / "topolite" / "ania"
+    a = Assembly.load([folder / f"{name}.obj" for name in ("piece4_tri", "piece0", "piece1", "piece3", "piece2")])
+    found = contacts(a)
+    check_geometry(a, found, atol=1e-5)
+    graph = _contact_graph(a, found)
+    assert sorted(graph.edges) == [(0, 1), (0, 2), (0, 3), (0, 4)]  # the four pieces rest on piece4_tri
+    assert len(found) == ANIA_CONTACTS
+    # pieces 3 and 2 are rotated by about 30 degrees and accurate to ~4e-5 rad only
+    assert len(contacts(a, angle_tol=1e-6)) == 2
+
+
+# --- invariance (property test) ------------------------------------------------------------
+
+
+def _mixed_meshes():
+    ell = shapely.Polygon([(0, 0), (2, 0), (2, 1), (1, 1), (1, 2), (0, 2)])
+    return [prism(ell), box([0.5, 0.5, 1], [2, 2, 2]), cube(2, 0), cube(2, 1, 0.5), box([-1, -1, -1], [3, 3, 0])]
+
+
+_BASE = _mixed_meshes()
+_BASE_CONTACTS = contacts(Assembly.from_meshes(_BASE))
+
+
+@settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(quaternion=st.lists(st.floats(-1, 1), min_size=4, max_size=4).filter(lambda q: np.linalg.norm(q) > 0.1),
+       shift=st.lists(st.floats(-50, 50), min_size=3, max_size=3), scale=st.floats(0.01, 100))
+def test_contacts_follow_rigid_motions_and_scalings(quaternion, shift, scale):
+    motion = trimesh.transformations.quaternion_matrix(np.asarray(quaternion) / np.linalg.norm(quaternion))
+    motion[:3, 3] = shift
+    motion[:3, :3] *= scale
+    moved = contacts(Assembly.from_meshes([m.copy().apply_transform(motion) for m in _BASE]))
+    assert len(moved) == len(_BASE_CONTACTS) == 6
+    rotation = motion[:3, :3] / scale
+    for c, d in zip(_BASE_CONTACTS, moved):
+        assert (c.i, c.j, c.facet_i, c.facet_j) == (d.i, d.j, d.facet_i, d.facet_j)
+        assert d.area == pytest.approx(c.area * scale**2, rel=1e-9)
+        np.testing.assert_allclose(d.normal, rotation @ c.normal, atol=1e-9)
+        expected = c.vertices @ motion[:3, :3].T + motion[:3, 3]
+        assert len(d.vertices) == len(expected)
+        distance = np.linalg.norm(d.vertices[:, None] - expected[None], axis=2)
+        assert distance.min(axis=1).max() < 1e-9 * scale + 1e-9 * np.linalg.norm(shift)
