@@ -112,17 +112,18 @@ def _exact_opening_motion(flint, M, A: InterlockingMatrix, verdict) -> bool:
     closed = np.flatnonzero(np.abs(x) <= 1e-9 * max(np.abs(x).max(), 1e-300))
     if len(closed) == len(x):
         return False
-    rows = [M.tolist()[r] for r in closed] if len(closed) else []
-    face = flint.fmpq_mat(len(rows), M.ncols(), [v for row in rows for v in row]) if rows else None
-    basis = _nullspace(flint, face) if face is not None else [
-        [flint.fmpq(int(i == k)) for i in range(M.ncols())] for k in range(M.ncols())]
+    n = M.ncols()
+    if len(closed):
+        basis = _nullspace(flint, _fmpq_mat(flint, A.matrix[closed]))
+    else:
+        basis = [[flint.fmpq(int(i == k)) for i in range(n)] for k in range(n)]
     if not basis:
         return False
     N = np.array([[float(v) for v in b] for b in basis]).T
     target = _columns(A, verdict.motion)
     coefficients = np.linalg.lstsq(N, target, rcond=None)[0]
     exact_c = flint.fmpq_mat(len(basis), 1, [flint.fmpq(*Fraction(float(c)).as_integer_ratio()) for c in coefficients])
-    exact_x = flint.fmpq_mat(M.ncols(), len(basis), [v for k in range(M.ncols()) for v in (b[k] for b in basis)]) * exact_c
+    exact_x = flint.fmpq_mat(n, len(basis), [v for k in range(n) for v in (b[k] for b in basis)]) * exact_c
     y = M * exact_x
     values = [y[k, 0] for k in range(M.nrows())]
     return all(v >= 0 for v in values) and any(v > 0 for v in values)

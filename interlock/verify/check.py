@@ -15,6 +15,7 @@ from interlock.blocks.assembly import Assembly
 from interlock.errors import InterlockError
 from interlock.verify.contacts import contacts as find_contacts
 from interlock.verify.matrix import InterlockingMatrix, interlocking_matrix
+from interlock.verify.validate import validate as check_overlaps
 
 __all__ = ["Verdict", "check", "RANK_RTOL", "RANK_MARGIN", "LP_TOL", "MOVING_RTOL", "DENSE_COLUMNS"]
 
@@ -84,7 +85,7 @@ class Verdict:
 
 
 def check(assembly: Assembly, frame=None, translational: bool = False, certify: bool = False, *,
-          rank_rtol: float = RANK_RTOL, lp_tol: float = LP_TOL, contacts=None) -> Verdict:
+          rank_rtol: float = RANK_RTOL, lp_tol: float = LP_TOL, contacts=None, validate: bool = True) -> Verdict:
     """Decide whether the assembly is infinitesimally interlocked with the given frame.
 
     The assembly is infinitesimally interlocked (Def. 3.3) iff ``{x : A x >= 0} = {0}``
@@ -110,6 +111,10 @@ def check(assembly: Assembly, frame=None, translational: bool = False, certify: 
         Re-check the verdict rigorously (:mod:`interlock.verify.certify`).
     rank_rtol, lp_tol : float
         Tolerances (see :data:`RANK_RTOL`, :data:`LP_TOL`); reported in the verdict.
+    contacts : sequence of Contact, optional
+        Precomputed contacts (e.g. to check several frames).
+    validate : bool
+        First check that no two blocks overlap (:func:`~interlock.verify.validate.validate`).
 
     Notes
     -----
@@ -131,6 +136,10 @@ def check(assembly: Assembly, frame=None, translational: bool = False, certify: 
     if len(assembly) == 0:
         raise InterlockError("the assembly has no blocks; there is nothing to check")
     timings = {}
+    if validate:
+        start = time.perf_counter()
+        check_overlaps(assembly)
+        timings["validate"] = time.perf_counter() - start
     start = time.perf_counter()
     found = find_contacts(assembly) if contacts is None else tuple(contacts)
     timings["contacts"] = time.perf_counter() - start

@@ -37,6 +37,10 @@ DEFAULT_CONTACT_RTOL = 1e-5
 DEFAULT_ANGLE_TOL = 1e-4
 #: Contact polygons of area at most this times the model size squared are dropped.
 DEFAULT_AREA_RTOL = 1e-10
+#: Overlaps are computed on a precision grid of this times the model size (GEOS snap rounding):
+#: in plain floating point, GEOS can return a whole square as the overlap of two squares that only
+#: share an edge with 1e-16 noise.
+OVERLAY_GRID_RTOL = 1e-13
 
 # Floor for tolerances of zero in the spatial index (relative; keeps its metric finite).
 _TINY = 1e-15
@@ -211,7 +215,8 @@ def contacts(assembly: Assembly, rtol: float = DEFAULT_CONTACT_RTOL, angle_tol: 
         return ()
     table = _FacetTable(assembly, rtol * scale, angle_tol)
     gi, gj = _matches(table, pairs, rtol * scale, angle_tol, scale)
-    return _overlaps(table, gi, gj, rtol * scale, area_rtol * scale**2)
+    grid = 2.0 ** math.floor(math.log2(OVERLAY_GRID_RTOL * scale))  # a power of two keeps dyadic coordinates exact
+    return _overlaps(table, gi, gj, rtol * scale, area_rtol * scale**2, grid)
 
 
 def facets(mesh: trimesh.Trimesh, atol: float | None = None, angle_tol: float = DEFAULT_ANGLE_TOL) -> Facets:
@@ -350,13 +355,41 @@ def _bases(normals):
 
 
 def _clean(polygons, atol):
-    """Drop near-collinear and near-duplicate vertices; exterior rings counter-clockwise."""
-    polygons = shapely.simplify(shapely.normalize(polygons), atol, preserve_topology=True)
-    if hasattr(shapely, "orient_polygons"):
-        return shapely.orient_polygons(polygons)
-    from shapely.geometry.polygon import orient  # shapely < 2.1
+    """Drop near-duplicate and near-collinear vertices anywhere in each ring; exteriors counter-clockwise.
 
-    return np.array([orient(p) if p.geom_type == "Polygon" else p for p in polygons], dtype=object)
+    (Douglas-Peucker simplification keeps each ring's start point, so a
+    duplicate there would survive and add a redundant row to the matrix.)
+    """
+    cleaned = np.array([_clean_polygon(p, atol) for p in np.atleast_1d(polygons)], dtype=object)
+    return shapely.orient_polygons(shapely.normalize(cleaned))
+
+
+def _clean_polygon(polygon, atol):
+    if polygon is None or polygon.is_empty or polygon.geom_type != "Polygon":
+        return polygon
+    exterior = _clean_ring(np.asarray(polygon.exterior.coords)[:-1], atol)
+    if len(exterior) < 3:
+        return shapely.Polygon()
+    holes = [h for h in (_clean_ring(np.asarray(r.coords)[:-1], atol) for r in polygon.interiors) if len(h) >= 3]
+    return shapely.Polygon(exterior, holes)
+
+
+def _clean_ring(ring, atol):
+    """Remove, until none is left, a vertex closer than ``atol`` to the segment joining its two neighbours."""
+    ring = list(ring)
+    changed = True
+    while changed and len(ring) > 2:
+        changed = False
+        for k in range(len(ring)):
+            a, b, c = np.asarray(ring[k - 1]), np.asarray(ring[k]), np.asarray(ring[(k + 1) % len(ring)])
+            ac = c - a
+            length = np.hypot(*ac)
+            t = np.clip(np.dot(b - a, ac) / length**2, 0.0, 1.0) if length > 0 else 0.0
+            if np.hypot(*(b - (a + t * ac))) <= atol:
+                del ring[k]
+                changed = True
+                break
+    return np.asarray(ring)
 
 
 class _FacetTable:
@@ -428,17 +461,18 @@ def _matches(table: _FacetTable, pairs, atol, angle_tol, scale):
     return gi[ok], gj[ok]
 
 
-def _overlaps(table: _FacetTable, gi, gj, atol, area_tol) -> tuple[Contact, ...]:
+def _overlaps(table: _FacetTable, gi, gj, atol, area_tol, grid) -> tuple[Contact, ...]:
     """Intersect matched facets in block i's facet frame; one Contact per overlap part."""
     if not len(gi):
         return ()
     bi, bj = table.bases[gi], table.bases[gj]
     linear = np.einsum("kar,kbr->kab", bi, bj)  # j's plane coordinates -> i's
     shift = np.einsum("kar,kr->ka", bi, table.origins[gj] - table.origins[gi])
-    moved = table.polygons[gj].copy()
+    # shapely.set_coordinates works in place and facets are shared between blocks of a type: copy first
+    moved = shapely.transform(table.polygons[gj], lambda coords: coords)
     xy, which = shapely.get_coordinates(moved, return_index=True)
     moved = shapely.set_coordinates(moved, np.einsum("kab,kb->ka", linear[which], xy) + shift[which])
-    overlap = shapely.intersection(table.polygons[gi], moved)
+    overlap = shapely.intersection(table.polygons[gi], moved, grid_size=grid)
     parts, k = shapely.get_parts(overlap, return_index=True)
     polygonal = shapely.get_type_id(parts) == 3
     parts, k = _clean(parts[polygonal], atol), k[polygonal]

@@ -6,6 +6,8 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
+import scipy.sparse.csgraph
+import scipy.spatial
 
 from interlock.blocks.assembly import Assembly
 from interlock.errors import InterlockError
@@ -144,12 +146,7 @@ def interlocking_matrix(assembly: Assembly, frame=None, translational: bool = Fa
     values_i[col_i < 0] = 0.0
     values_j[col_j < 0] = 0.0
 
-    # merge identical rows
-    scale = max(np.abs(values_i).max(initial=0), np.abs(values_j).max(initial=0)) or 1.0
-    key = np.hstack([col_i[:, None], col_j[:, None], np.round(values_i / (scale * MERGE_RTOL)),
-                     np.round(values_j / (scale * MERGE_RTOL))])
-    _, first = np.unique(key, axis=0, return_index=True)
-    first.sort()
+    first = _distinct_rows(col_i, col_j, values_i, values_j)
     values_i, values_j, col_i, col_j = values_i[first], values_j[first], col_i[first], col_j[first]
 
     rows = np.arange(len(first))
@@ -164,6 +161,27 @@ def interlocking_matrix(assembly: Assembly, frame=None, translational: bool = Fa
                            shape=(len(first), size * len(free)))
     matrix.eliminate_zeros()
     return InterlockingMatrix(matrix, free, centres, contact_of[first], vertex_of[first], length, translational)
+
+
+def _distinct_rows(col_i, col_j, values_i, values_j) -> np.ndarray:
+    """Index of the first row of each class of identical rows (entries within ``MERGE_RTOL``).
+
+    Rows are points in R^12 (their two blocks' entries), grouped by their
+    column pair; rows closer than the tolerance are joined (k-d tree pairs,
+    then connected components), which unlike rounding to a grid does not
+    depend on where the rounding boundaries fall.
+    """
+    values = np.hstack([values_i, values_j])
+    scale = np.abs(values).max(initial=0.0) or 1.0
+    spread = 4.0 * scale * values.shape[1]  # farther apart than any two rows of one column pair
+    points = np.hstack([values, spread * np.column_stack([col_i, col_j])])
+    pairs = scipy.spatial.cKDTree(points).query_pairs(MERGE_RTOL * scale, output_type="ndarray")
+    count = len(points)
+    graph = sp.coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(count, count))
+    _, label = scipy.sparse.csgraph.connected_components(graph, directed=False)
+    first = np.full(label.max(initial=-1) + 1, count)
+    np.minimum.at(first, label, np.arange(count))
+    return np.sort(first)
 
 
 def _frame(assembly: Assembly, frame) -> set[int]:
