@@ -17,6 +17,7 @@ from interlock.errors import InterlockError
 __all__ = ["main"]
 
 EXIT_BAD_INPUT = 2
+MOVING_SHOWN = 12
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -56,6 +57,19 @@ def _parser() -> argparse.ArgumentParser:
     one.add_argument("--gamma", type=float, default=None, help="cell angle in degrees (default: the crystal system's)")
     one.add_argument("--json", action="store_true", help="print JSON instead of text")
     one.set_defaults(run=_run_group)
+
+    verify = commands.add_parser(
+        "verify", help="decide whether blocks from mesh files interlock (LP + rank, Def. 3.3)",
+        description="Decide whether the blocks in the given mesh files interlock with the fixed blocks as frame. "
+                    "Give one file per block (numbered from 0 in the order given) or one file holding all blocks.",
+    )
+    verify.add_argument("paths", nargs="+", help="OBJ/STL/PLY/GLB files")
+    verify.add_argument("--fixed", default="", metavar="LIST",
+                        help="frame: block indices, e.g. 0,1 or 0-3,7 (default: none)")
+    verify.add_argument("--translational", action="store_true", help="translations only")
+    verify.add_argument("--certify", action="store_true", help="re-check the verdict rigorously")
+    verify.add_argument("--json", action="store_true", help="print JSON instead of text")
+    verify.set_defaults(run=_run_verify)
     return parser
 
 
@@ -89,6 +103,42 @@ def _run_groups(args) -> int:
         print(f"{r['name']:6} {r['crystal_system']:20} {r['point_group_order']:>5} "
               f"{len(r['side_pairings']):>5} {len(pairs):>16}")
     return 0
+
+
+def _run_verify(args) -> int:
+    from interlock.blocks import Assembly
+    from interlock.verify import check
+
+    paths = args.paths[0] if len(args.paths) == 1 else args.paths
+    assembly = Assembly.load(paths, frame=_indices(args.fixed))
+    verdict = check(assembly, translational=args.translational, certify=args.certify)
+    if args.json:
+        record = verdict.to_dict()
+        record["blocks"] = [str(label) for label in assembly.labels]
+        print(json.dumps(record, indent=2))
+        return 0
+    print(verdict)
+    print(f"blocks: {len(assembly)}, frame: {list(verdict.frame)}, contacts: {verdict.contacts}")
+    if verdict.moving:
+        shown = ", ".join(f"{b} ({assembly.labels[b]})" for b in verdict.moving[:MOVING_SHOWN])
+        more = f" and {len(verdict.moving) - MOVING_SHOWN} more" if len(verdict.moving) > MOVING_SHOWN else ""
+        print(f"moving blocks: {shown}{more}")
+    if verdict.stress is not None and verdict.interlocked:
+        print(f"self-stress: {len(verdict.stress)} positive weights, smallest {verdict.stress.min():.3g}")
+    timings = ", ".join(f"{name} {seconds:.3f}s" for name, seconds in verdict.timings.items())
+    print(f"timings: {timings}")
+    return 0
+
+
+def _indices(text: str) -> list[int]:
+    """'0,1,4-6' -> [0, 1, 4, 5, 6]."""
+    out = []
+    for part in filter(None, (p.strip() for p in text.split(","))):
+        low, dash, high = part.partition("-")
+        if not low.isdigit() or (dash and not high.isdigit()):
+            raise InterlockError(f"cannot read block list {text!r}: use indices and ranges such as 0,1 or 0-3,7")
+        out += list(range(int(low), int(high) + 1)) if dash else [int(low)]
+    return out
 
 
 def _run_group(args) -> int:

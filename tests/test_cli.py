@@ -46,3 +46,48 @@ def test_bad_input_is_one_line_and_nonzero(argv, message):
     assert "Traceback" not in run.stderr
     lines = run.stderr.strip().splitlines()
     assert len(lines) == 1 and message in lines[0] and lines[0].startswith("interlock group: error:")
+
+
+def _cube_files(tmp_path, offsets):
+    import trimesh
+
+    paths = []
+    for k, (x, y) in enumerate(offsets):
+        path = tmp_path / f"cube{k}.stl"
+        trimesh.creation.box(bounds=[[x, y, 0], [x + 1, y + 1, 1]]).export(path)
+        paths.append(str(path))
+    return paths
+
+
+def test_verify_reports_example_3_5(tmp_path, capsys):
+    grid = [(x, y) for x in range(3) for y in range(3)]
+    paths = _cube_files(tmp_path, grid)
+    assert main(["verify", *paths, "--fixed", "0-3,5-8", "--certify"]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("not infinitesimally interlocked, certified: block 4 has a first-order motion")
+    assert "moving blocks: 4 (cube4.stl)" in out
+    assert main(["verify", *paths, "--fixed", "0-3,5-8", "--json"]) == 0
+    record = json.loads(capsys.readouterr().out)
+    assert record["interlocked"] is False and record["rank"] == 5 and record["shape"] == [16, 6]
+    assert record["moving"] == [4] and record["blocks"][4] == "cube4.stl"
+
+
+@pytest.mark.parametrize("argv_tail,message", [
+    (["--fixed", "x"], "cannot read block list 'x'"),
+    (["--fixed", "7"], "frame index 7 is out of range for 2 blocks"),
+])
+def test_verify_bad_input_is_one_line(tmp_path, argv_tail, message):
+    paths = _cube_files(tmp_path, [(0, 0), (1, 0)])
+    run = subprocess.run([sys.executable, "-m", "interlock", "verify", *paths, *argv_tail],
+                         capture_output=True, text=True)
+    assert run.returncode == 2 and "Traceback" not in run.stderr
+    assert run.stderr.strip().splitlines() == [f"interlock verify: error: {run.stderr.split('error: ', 1)[1].strip()}"]
+    assert message in run.stderr
+
+
+def test_verify_overlapping_blocks_is_one_line(tmp_path):
+    paths = _cube_files(tmp_path, [(0, 0), (0.5, 0)])
+    run = subprocess.run([sys.executable, "-m", "interlock", "verify", *paths, "--fixed", "0"],
+                         capture_output=True, text=True)
+    assert run.returncode == 2 and "Traceback" not in run.stderr
+    assert "blocks 0 (cube0.stl) and 1 (cube1.stl) overlap" in run.stderr

@@ -357,39 +357,43 @@ def _bases(normals):
 def _clean(polygons, atol):
     """Drop near-duplicate and near-collinear vertices anywhere in each ring; exteriors counter-clockwise.
 
-    (Douglas-Peucker simplification keeps each ring's start point, so a
-    duplicate there would survive and add a redundant row to the matrix.)
+    A vertex closer than ``atol`` to the segment joining its two neighbours is
+    removed, repeatedly, for all rings at once (each pass removes the first
+    vertex of every run of such vertices, then re-checks).  Douglas-Peucker
+    simplification would keep each ring's start point, so a duplicate there
+    would survive and add a redundant row to the interlocking matrix.
     """
-    cleaned = np.array([_clean_polygon(p, atol) for p in np.atleast_1d(polygons)], dtype=object)
-    return shapely.orient_polygons(shapely.normalize(cleaned))
-
-
-def _clean_polygon(polygon, atol):
-    if polygon is None or polygon.is_empty or polygon.geom_type != "Polygon":
-        return polygon
-    exterior = _clean_ring(np.asarray(polygon.exterior.coords)[:-1], atol)
-    if len(exterior) < 3:
-        return shapely.Polygon()
-    holes = [h for h in (_clean_ring(np.asarray(r.coords)[:-1], atol) for r in polygon.interiors) if len(h) >= 3]
-    return shapely.Polygon(exterior, holes)
-
-
-def _clean_ring(ring, atol):
-    """Remove, until none is left, a vertex closer than ``atol`` to the segment joining its two neighbours."""
-    ring = list(ring)
-    changed = True
-    while changed and len(ring) > 2:
-        changed = False
-        for k in range(len(ring)):
-            a, b, c = np.asarray(ring[k - 1]), np.asarray(ring[k]), np.asarray(ring[(k + 1) % len(ring)])
-            ac = c - a
-            length = np.hypot(*ac)
-            t = np.clip(np.dot(b - a, ac) / length**2, 0.0, 1.0) if length > 0 else 0.0
-            if np.hypot(*(b - (a + t * ac))) <= atol:
-                del ring[k]
-                changed = True
-                break
-    return np.asarray(ring)
+    polygons = np.atleast_1d(polygons)
+    rings, polygon_of = shapely.get_rings(polygons, return_index=True)
+    coords, ring_of = shapely.get_coordinates(rings, return_index=True)
+    if not len(coords):
+        return np.array([shapely.Polygon()] * len(polygons), dtype=object)
+    closing = np.r_[ring_of[1:] != ring_of[:-1], True]
+    coords, ring_of = coords[~closing], ring_of[~closing]
+    while len(coords):
+        first = np.r_[0, np.flatnonzero(np.diff(ring_of)) + 1]
+        length = np.diff(np.r_[first, len(coords)])
+        first, length = np.repeat(first, length), np.repeat(length, length)
+        position = np.arange(len(coords)) - first
+        prev, nxt = first + (position - 1) % length, first + (position + 1) % length
+        a, ac = coords[prev], coords[nxt] - coords[prev]
+        squared = np.einsum("ij,ij->i", ac, ac)
+        t = np.clip(np.einsum("ij,ij->i", coords - a, ac) / np.where(squared > 0, squared, 1.0), 0.0, 1.0)
+        near = (np.hypot(*(coords - a - t[:, None] * ac).T) <= atol) & (length > 3)
+        remove = near & ~near[prev]
+        if not remove.any():
+            break
+        coords, ring_of = coords[~remove], ring_of[~remove]
+    counts = np.bincount(ring_of, minlength=len(rings))
+    bounds = np.r_[0, np.cumsum(counts)]
+    first_ring = np.r_[0, np.cumsum(np.bincount(polygon_of, minlength=len(polygons)))]  # rings come per polygon
+    out = np.empty(len(polygons), dtype=object)
+    for p in range(len(polygons)):
+        members = range(first_ring[p], first_ring[p + 1])
+        valid = [coords[bounds[k]:bounds[k + 1]] for k in members if counts[k] >= 3]
+        exterior_ok = len(members) > 0 and counts[members[0]] >= 3
+        out[p] = shapely.Polygon(valid[0], valid[1:]) if exterior_ok else shapely.Polygon()
+    return shapely.orient_polygons(shapely.normalize(out))
 
 
 class _FacetTable:
@@ -472,6 +476,10 @@ def _overlaps(table: _FacetTable, gi, gj, atol, area_tol, grid) -> tuple[Contact
     moved = shapely.transform(table.polygons[gj], lambda coords: coords)
     xy, which = shapely.get_coordinates(moved, return_index=True)
     moved = shapely.set_coordinates(moved, np.einsum("kab,kb->ka", linear[which], xy) + shift[which])
+    # coplanar facets far apart in their plane cannot overlap: skip them before the (costly) overlay
+    box_i, box_j = shapely.bounds(table.polygons[gi]), shapely.bounds(moved)
+    apart = np.any((box_i[:, 2:] <= box_j[:, :2] + atol) | (box_j[:, 2:] <= box_i[:, :2] + atol), axis=1)
+    gi, gj, moved = gi[~apart], gj[~apart], moved[~apart]
     overlap = shapely.intersection(table.polygons[gi], moved, grid_size=grid)
     parts, k = shapely.get_parts(overlap, return_index=True)
     polygonal = shapely.get_type_id(parts) == 3
