@@ -17,12 +17,14 @@ from interlock.verify.contacts import contacts as find_contacts
 from interlock.verify.matrix import InterlockingMatrix, interlocking_matrix
 from interlock.verify.validate import validate as check_overlaps
 
-__all__ = ["Verdict", "check", "RANK_RTOL", "RANK_MARGIN", "LP_TOL", "MOVING_RTOL", "DENSE_COLUMNS"]
+__all__ = ["Verdict", "check", "RANK_RTOL", "RANK_CLEAR_RTOL", "LP_TOL", "MOVING_RTOL", "DENSE_COLUMNS"]
 
 #: A singular value at most ``RANK_RTOL * sigma_max`` is zero ...
 RANK_RTOL = 1e-9
-#: ... one at least ``RANK_MARGIN * RANK_RTOL * sigma_max`` is not; in between the rank is inconclusive.
-RANK_MARGIN = 1e3
+#: ... one at least ``RANK_CLEAR_RTOL * sigma_max`` is not; in between the rank is inconclusive.
+RANK_CLEAR_RTOL = 1e-6
+#: The sparse path works with A^T A, which resolves singular values down to about this (relative).
+GRAM_RESOLUTION = 1e-7
 #: LP feasibility and optimality tolerance (entries of A are O(1)).
 LP_TOL = 1e-7
 #: Blocks whose twist is below this fraction of the largest one do not move.
@@ -154,7 +156,7 @@ def check(assembly: Assembly, frame=None, translational: bool = False, certify: 
     A = interlocking_matrix(assembly, frame, translational, contacts=found)
     timings["matrix"] = time.perf_counter() - start
     fixed = tuple(sorted(set(range(len(assembly))) - set(A.free.tolist())))
-    tolerances = {"rank_rtol": rank_rtol, "rank_margin": RANK_MARGIN, "lp_tol": lp_tol, "moving_rtol": MOVING_RTOL,
+    tolerances = {"rank_rtol": rank_rtol, "rank_clear_rtol": RANK_CLEAR_RTOL, "lp_tol": lp_tol, "moving_rtol": MOVING_RTOL,
                   "length_scale": A.length_scale}
     base = dict(frame=fixed, shape=A.shape, translational=translational, contacts=len(found),
                 tolerances=tolerances, timings=timings)
@@ -214,7 +216,7 @@ def _rank(A: sp.csr_matrix, rtol: float):
         sigma = np.concatenate([sigma, np.zeros(n - len(sigma))])
         top = sigma.max(initial=0.0) or 1.0
         zero = sigma <= rtol * top
-        clear = not np.any((sigma > rtol * top) & (sigma < RANK_MARGIN * rtol * top))
+        clear = not np.any((sigma > rtol * top) & (sigma < RANK_CLEAR_RTOL * top))
         return int((~zero).sum()), vt[zero].T, clear
     return _sparse_rank(A, rtol)
 
@@ -230,8 +232,8 @@ def _sparse_rank(A: sp.csr_matrix, rtol: float):
     """
     n = A.shape[1]
     gram = (A.T @ A).tocsc()
-    top = float(scipy.sparse.linalg.eigsh(gram, k=1, which="LA", return_eigenvectors=False)[0])
-    threshold = max(rtol, 1e-7) * np.sqrt(top)  # A^T A resolves singular values down to ~1e-8 relative
+    top = float(scipy.sparse.linalg.norm(gram, 1))  # >= sigma_max^2, and as close as a Lanczos run for these matrices
+    threshold = max(rtol, GRAM_RESOLUTION) * np.sqrt(top)
     shift = 1e-10 * top
     lu = scipy.sparse.linalg.splu((gram + shift * sp.identity(n, format="csc")).tocsc())
     rng = np.random.default_rng(0)
@@ -246,7 +248,7 @@ def _sparse_rank(A: sp.csr_matrix, rtol: float):
         if not zero.all() or k >= min(MAX_KERNEL_PROBE, n):
             break
         k = min(2 * k, MAX_KERNEL_PROBE, n)
-    clear = not np.any((sigma > threshold) & (sigma < RANK_MARGIN * threshold))
+    clear = not np.any((sigma > threshold) & (sigma < RANK_CLEAR_RTOL * np.sqrt(top)))
     return int(n - zero.sum()), (block @ rotation)[:, zero], clear
 
 
