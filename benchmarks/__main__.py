@@ -2,10 +2,10 @@
 
 import argparse
 
-from benchmarks import wallpaper
+from benchmarks import rhomblock, wallpaper
 
 parser = argparse.ArgumentParser(prog="python -m benchmarks", description="Run every benchmark.")
 parser.add_argument("--quick", action="store_true", help="a small version, for tests")
 args = parser.parse_args()
-for module in (wallpaper,):
+for module in (wallpaper, rhomblock):
     module.run(quick=args.quick)
