@@ -59,3 +59,22 @@ def pyplot():
     import matplotlib.pyplot as plt
 
     return plt
+
+
+def save_chart(fig, name: str) -> Path:
+    """Write ``benchmarks/results/<name>.png`` and close the figure."""
+    RESULTS.mkdir(parents=True, exist_ok=True)
+    path = RESULTS / f"{name}.png"
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    fig.clf()
+    return path
+
+
+def main(run, doc: str) -> None:
+    """Command line of one benchmark module: ``python -m benchmarks.<name> [--quick]``."""
+    import argparse
+
+    parser = argparse.ArgumentParser(description=doc)
+    parser.add_argument("--quick", action="store_true", help="a small version, for tests")
+    run(quick=parser.parse_args().quick)

@@ -8,11 +8,10 @@ sampled tiling, for both variants of main paper Thm. 4.9.
 
 from __future__ import annotations
 
-import argparse
 import statistics
 import time
 
-from benchmarks.common import RESULTS, pyplot, write_json
+from benchmarks.common import main, pyplot, save_chart, write_json
 from interlock.blocks.lozenge import random_hexagon
 from interlock.blocks.rhomblock import VARIANTS, rhomblock_assembly
 
@@ -59,12 +58,9 @@ def _chart(rows):
     ax.set_ylabel("median seconds")
     ax.set_title("RhomBlock assemblies on uniform random lozenge tilings")
     ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(RESULTS / "rhomblock.png", dpi=120)
+    save_chart(fig, "rhomblock")
     plt.close(fig)
 
 
 if __name__ == "__main__":
-    parser = argparse.ArgumentParser(description=__doc__)
-    parser.add_argument("--quick", action="store_true")
-    run(parser.parse_args().quick)
+    main(run, __doc__)

@@ -7,15 +7,14 @@ the same process, so their ratio is meaningful on a shared machine.
 
 from __future__ import annotations
 
-import argparse
 import time
 from pathlib import Path
 
 import networkx as nx
 import numpy as np
 
-from benchmarks.common import RESULTS, median_time, pyplot, write_json
-from interlock.blocks import Assembly, presets
+from benchmarks.common import main, median_time, pyplot, save_chart, write_json
+from interlock.blocks import Assembly, presets, random_hexagon, rhomblock_assembly
 from interlock.verify import check, contacts
 from interlock.verify.check import _positive_stress
 
@@ -87,10 +86,30 @@ def run(quick: bool = False) -> dict:
         "stages_last_run": stages,
     }
     result["growth"] = _growth(quick)
+    result["rhomblock"] = _rhomblock_growth(quick)
     path = write_json("verify", result)
     print(f"wrote {path}")
-    _chart(rows, result["growth"])
+    _chart(rows, result["growth"], result["rhomblock"])
     return result
+
+
+def _rhomblock_growth(quick: bool) -> list[dict]:
+    """Stage timings of ``check`` on RhomBlock hexagons (random tiling, outer ring fixed), and peak memory."""
+    import resource
+
+    sides = (5, 10) if quick else (5, 10, 20, 30, 40)
+    rows = []
+    for n in sides:
+        assembly = rhomblock_assembly(random_hexagon(n, n, n, seed=1), 0, frame="boundary")
+        start = time.perf_counter()
+        verdict = check(assembly)
+        seconds = time.perf_counter() - start
+        peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024  # MiB (Linux reports KiB)
+        rows.append({"side": n, "blocks": len(assembly), "seconds": seconds, "shape": list(verdict.shape),
+                     "interlocked": verdict.interlocked, "stages": dict(verdict.timings), "peak_rss_mib": peak})
+        print(f"RhomBlock hexagon {n}x{n}x{n} ({len(assembly)} blocks): {seconds:.2f} s, "
+              f"{verdict.interlocked}, stages " + ", ".join(f"{k} {v:.2f}" for k, v in verdict.timings.items()))
+    return rows
 
 
 def _growth(quick: bool) -> list[dict]:
@@ -108,11 +127,11 @@ def _growth(quick: bool) -> list[dict]:
     return rows
 
 
-def _chart(rows, growth):
+def _chart(rows, growth, rhomblocks):
     plt = pyplot()
     if plt is None:
         return
-    fig, (ax, grow) = plt.subplots(1, 2, figsize=(12, 3.2), gridspec_kw={"width_ratios": [3, 2]})
+    fig, (ax, grow, rhomb) = plt.subplots(1, 3, figsize=(16, 3.4), gridspec_kw={"width_ratios": [3, 2, 2]})
     names = [r["method"] for r in rows]
     ax.barh(names, [r["median_seconds"] for r in rows], color=["#4c72b0", "#55a868", "#c44e52"])
     for y, r in enumerate(rows):
@@ -122,15 +141,21 @@ def _chart(rows, growth):
     blocks = [g["blocks"] for g in growth]
     grow.loglog(blocks, [g["ours_seconds"] for g in growth], "o-", label="check (spatial index)")
     grow.loglog(blocks, [g["naive_seconds"] for g in growth], "s--", label="naive (all pairs, dense rank)")
+    grow.set_xticks(blocks, [str(b) for b in blocks])
+    grow.minorticks_off()
     grow.set_xlabel("blocks (square cube grid, ring fixed)")
     grow.set_ylabel("median seconds")
     grow.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(RESULTS / "verify.png", dpi=120)
+    blocks = [r["blocks"] for r in rhomblocks]
+    for stage in ("contacts", "rank", "lp"):
+        rhomb.loglog(blocks, [r["stages"].get(stage, float("nan")) for r in rhomblocks], "o-", label=stage)
+    rhomb.loglog(blocks, [r["seconds"] for r in rhomblocks], "k.-", label="total")
+    rhomb.set_xlabel("RhomBlocks (n x n x n hexagon, ring fixed)")
+    rhomb.set_ylabel("seconds")
+    rhomb.legend(fontsize=8)
+    save_chart(fig, "verify")
     plt.close(fig)
 
 
 if __name__ == "__main__":
-    parser = argparse.ArgumentParser(description=__doc__)
-    parser.add_argument("--quick", action="store_true")
-    run(parser.parse_args().quick)
+    main(run, __doc__)

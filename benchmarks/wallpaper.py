@@ -6,10 +6,9 @@ ratio to p1 at the same radius (measured in the same process).
 
 from __future__ import annotations
 
-import argparse
 import math
 
-from benchmarks.common import RESULTS, median_time, pyplot, write_json
+from benchmarks.common import main, median_time, pyplot, save_chart, write_json
 from interlock import wallpaper
 
 
@@ -46,12 +45,9 @@ def _chart(rows):
     ax.set_ylabel("median seconds per elements_within call")
     ax.set_title("Orbit enumeration cost, 17 wallpaper groups")
     ax.legend(ncol=3, fontsize=7)
-    fig.tight_layout()
-    fig.savefig(RESULTS / "wallpaper.png", dpi=120)
+    save_chart(fig, "wallpaper")
     plt.close(fig)
 
 
 if __name__ == "__main__":
-    parser = argparse.ArgumentParser(description=__doc__)
-    parser.add_argument("--quick", action="store_true")
-    run(parser.parse_args().quick)
+    main(run, __doc__)

@@ -29,7 +29,7 @@ def all_groups_and_lattices():
     return cases
 
 
-@pytest.fixture
+@pytest.fixture(scope="session")
 def shared_data():
     if not SHARED_DATA.is_dir():
         pytest.skip(f"reference data folder {SHARED_DATA} is absent (it lives beside the project, in ../shared/data)")

@@ -2,8 +2,9 @@
 
 from __future__ import annotations
 
+
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from numbers import Real
 
 import numpy as np
@@ -41,6 +42,10 @@ DEFAULT_AREA_RTOL = 1e-10
 #: in plain floating point, GEOS can return a whole square as the overlap of two squares that only
 #: share an edge with 1e-16 noise.
 OVERLAY_GRID_RTOL = 1e-13
+#: Instanced pairs with equal relative transforms (to this many decimals, lengths over the model size)
+#: share one contact computation; it is used when kinds are at most this share of the pairs.
+KIND_DECIMALS = 9
+KIND_SHARE = 0.5
 
 # Floor for tolerances of zero in the spatial index (relative; keeps its metric finite).
 _TINY = 1e-15
@@ -213,10 +218,58 @@ def contacts(assembly: Assembly, rtol: float = DEFAULT_CONTACT_RTOL, angle_tol: 
     pairs = np.array(sorted((min(u, v), max(u, v)) for u, v in graph.edges if u != v), dtype=int).reshape(-1, 2)
     if not len(pairs):
         return ()
+    kinds, kind_of = _pair_kinds(assembly, pairs)
+    if len(kinds) > KIND_SHARE * len(pairs):
+        return _pair_contacts(assembly, pairs, scale, rtol, angle_tol, area_rtol)
+    # instanced blocks: one computation per kind of pair, on a stand-in of two blocks, moved to every pair
+    i, j = pairs[kinds].T
+    relative = np.linalg.inv(assembly.transforms[i]) @ assembly.transforms[j]
+    stand_in = Assembly(assembly.meshes, np.column_stack([assembly.types[i], assembly.types[j]]).ravel(),
+                        np.stack([np.broadcast_to(np.eye(4), relative.shape), relative], axis=1).reshape(-1, 4, 4))
+    local = _pair_contacts(stand_in, np.arange(2 * len(kinds)).reshape(-1, 2), scale, rtol, angle_tol, area_rtol)
+    by_kind = {}
+    for contact in local:
+        by_kind.setdefault(contact.i // 2, []).append(contact)
+    found = [_moved(contact, int(a), int(b), assembly.transforms[a])
+             for (a, b), k in zip(pairs, kind_of) for contact in by_kind.get(int(k), ())]
+    return tuple(sorted(found, key=lambda c: (c.i, c.j, c.facet_i, c.facet_j)))
+
+
+def _pair_contacts(assembly, pairs, scale, rtol, angle_tol, area_rtol) -> tuple[Contact, ...]:
+    """Contacts of the given block pairs, tolerances relative to ``scale``."""
     table = _FacetTable(assembly, rtol * scale, angle_tol)
     gi, gj = _matches(table, pairs, rtol * scale, angle_tol, scale)
     grid = 2.0 ** math.floor(math.log2(OVERLAY_GRID_RTOL * scale))  # a power of two keeps dyadic coordinates exact
     return _overlaps(table, gi, gj, rtol * scale, area_rtol * scale**2, grid)
+
+
+def _pair_kinds(assembly, pairs):
+    """Representative pair of each kind (types and relative transform), and the kind of every pair."""
+    i, j = pairs.T
+    relative = np.linalg.inv(assembly.transforms[i]) @ assembly.transforms[j]
+    relative[:, :3, 3] /= assembly.scale
+    key = np.hstack([assembly.types[i, None], assembly.types[j, None],
+                     np.round(relative[:, :3].reshape(len(pairs), -1), KIND_DECIMALS) + 0.0])
+    _, first, kind_of = np.unique(key, axis=0, return_index=True, return_inverse=True)
+    return first, kind_of.ravel()
+
+
+def _moved(contact: Contact, i: int, j: int, transform: np.ndarray) -> Contact:
+    """A contact computed with block i at the origin, placed for blocks i, j (block i moved by ``transform``)."""
+    rotation, shift = transform[:3, :3], transform[:3, 3]
+    basis, origin = contact.basis @ rotation.T, rotation @ contact.origin + shift
+    polygon, vertices = contact.polygon, contact.vertices @ rotation.T + shift
+    if np.linalg.det(rotation) < 0:  # keep u x v = n and counter-clockwise rings: flip v and the polygon's y
+        basis = basis * np.array([[1.0], [-1.0]])
+        polygon = shapely.orient_polygons(shapely.transform(polygon, lambda xy: xy * [1.0, -1.0]))
+        xy, ring = shapely.get_coordinates(shapely.get_rings(polygon), return_index=True)
+        xy = xy[np.r_[ring[1:] == ring[:-1], False]]  # without each ring's closing repeat
+        vertices = origin + xy @ basis
+    arrays = [rotation @ contact.normal, vertices, origin, basis]
+    for array in arrays:
+        array.setflags(write=False)
+    normal, vertices, origin, basis = arrays
+    return replace(contact, i=i, j=j, normal=normal, vertices=vertices, origin=origin, basis=basis, polygon=polygon)
 
 
 def facets(mesh: trimesh.Trimesh, atol: float | None = None, angle_tol: float = DEFAULT_ANGLE_TOL) -> Facets:
@@ -358,8 +411,9 @@ def _clean(polygons, atol):
     """Drop near-duplicate and near-collinear vertices anywhere in each ring; exteriors counter-clockwise.
 
     A vertex closer than ``atol`` to the segment joining its two neighbours is
-    removed, repeatedly, for all rings at once (each pass removes the first
-    vertex of every run of such vertices, then re-checks).  Douglas-Peucker
+    removed, repeatedly, for all rings at once (each pass removes, in every
+    run of such vertices, those nearest to their neighbours' segment, then
+    re-checks).  Douglas-Peucker
     simplification would keep each ring's start point, so a duplicate there
     would survive and add a redundant row to the interlocking matrix.
     """
@@ -379,8 +433,11 @@ def _clean(polygons, atol):
         a, ac = coords[prev], coords[nxt] - coords[prev]
         squared = np.einsum("ij,ij->i", ac, ac)
         t = np.clip(np.einsum("ij,ij->i", coords - a, ac) / np.where(squared > 0, squared, 1.0), 0.0, 1.0)
-        near = (np.hypot(*(coords - a - t[:, None] * ac).T) <= atol) & (length > 3)
-        remove = near & ~near[prev]
+        distance = np.hypot(*(coords - a - t[:, None] * ac).T)
+        near = (distance <= atol) & (length > 3)
+        # in a run of removable vertices remove the most collinear first (a corner beside a spurious
+        # vertex from nearly parallel edges is farther from its neighbours' segment than the spurious one)
+        remove = near & ~(near[prev] & (distance[prev] < distance)) & ~(near[nxt] & (distance[nxt] <= distance))
         if not remove.any():
             break
         coords, ring_of = coords[~remove], ring_of[~remove]

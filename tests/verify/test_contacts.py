@@ -320,3 +320,30 @@ def test_contacts_follow_rigid_motions_and_scalings(quaternion, shift, scale):
         assert len(d.vertices) == len(expected)
         distance = np.linalg.norm(d.vertices[:, None] - expected[None], axis=2)
         assert distance.min(axis=1).max() < 1e-9 * scale + 1e-9 * np.linalg.norm(shift)
+
+
+@pytest.mark.parametrize("which", ["rhomblocks", "pg patch (mirror images)"])
+def test_instanced_pairs_share_one_computation_per_kind(which):
+    import sys
+
+    from interlock import wallpaper
+    from interlock.blocks import escher_block, patch, random_hexagon, rhomblock_assembly
+
+    module = sys.modules["interlock.verify.contacts"]
+    if which == "rhomblocks":
+        assembly = rhomblock_assembly(random_hexagon(6, 6, 6, seed=3), 1)
+    else:
+        assembly = patch(escher_block(wallpaper.group("pg"), {0: [(0.25, 0.1)]}), 2.0)
+    pairs = np.array(sorted(assembly.neighbours.edges))
+    kinds, _ = module._pair_kinds(assembly, pairs)
+    assert len(kinds) <= module.KIND_SHARE * len(pairs)  # the shared path is the one taken
+    shared = contacts(assembly)
+    direct = module._pair_contacts(assembly, pairs, assembly.scale, module.DEFAULT_CONTACT_RTOL,
+                                   module.DEFAULT_ANGLE_TOL, module.DEFAULT_AREA_RTOL)
+    assert [(c.i, c.j, c.facet_i, c.facet_j) for c in shared] == [(c.i, c.j, c.facet_i, c.facet_j) for c in direct]
+    for c, d in zip(shared, direct):
+        assert c.area == pytest.approx(d.area, rel=1e-12)
+        np.testing.assert_allclose(c.normal, d.normal, atol=1e-12)
+        np.testing.assert_allclose(np.sort(c.vertices, axis=0), np.sort(d.vertices, axis=0), atol=1e-12)
+        # rings stay counter-clockwise about the normal, also for mirror images
+        assert np.dot(np.cross(c.vertices[1] - c.vertices[0], c.vertices[2] - c.vertices[1]), c.normal) > 0
