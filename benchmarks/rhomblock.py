@@ -34,9 +34,8 @@ def run(quick: bool = False) -> dict:
                      "assembly_seconds": statistics.median(build), "sample_runs": sample, "assembly_runs": build})
         print(f"n = {n:3d} ({3 * n * n:5d} blocks): sampling {rows[-1]['sample_seconds']:.3f} s, "
               f"assembly {rows[-1]['assembly_seconds']:.3f} s (medians of {repeats})")
-    path = write_json("rhomblock", {"benchmark": "random_hexagon + rhomblock_assembly", "repeats": repeats,
+    write_json("rhomblock", {"benchmark": "random_hexagon + rhomblock_assembly", "repeats": repeats,
                                     "rows": rows})
-    print(f"wrote {path}")
     _chart(rows)
     return {"rows": rows}
 

@@ -87,8 +87,7 @@ def run(quick: bool = False) -> dict:
     }
     result["growth"] = _growth(quick)
     result["rhomblock"] = _rhomblock_growth(quick)
-    path = write_json("verify", result)
-    print(f"wrote {path}")
+    write_json("verify", result)
     _chart(rows, result["growth"], result["rhomblock"])
     return result
 

@@ -27,8 +27,7 @@ def run(quick: bool = False) -> dict:
     base = {row["radius_cells"]: row["seconds"] for row in rows if row["group"] == "p1"}
     for row in rows:
         row["ratio_to_p1"] = row["seconds"] / base[row["radius_cells"]]
-    path = write_json("wallpaper", {"benchmark": "elements_within", "repeats": repeats, "rows": rows})
-    print(f"wrote {path}")
+    write_json("wallpaper", {"benchmark": "elements_within", "repeats": repeats, "rows": rows})
     _chart(rows)
     return {"rows": rows}
 

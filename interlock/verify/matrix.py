@@ -11,6 +11,7 @@ import scipy.spatial
 
 from interlock.blocks.assembly import Assembly
 from interlock.errors import InterlockError
+from interlock.verify.contacts import contacts as find_contacts
 
 __all__ = ["InterlockingMatrix", "interlocking_matrix", "MERGE_RTOL"]
 
@@ -100,8 +101,6 @@ def interlocking_matrix(assembly: Assembly, frame=None, translational: bool = Fa
     >>> A.shape
     (4, 6)
     """
-    from interlock.verify.contacts import contacts as find_contacts
-
     if not isinstance(assembly, Assembly):
         raise InterlockError(f"expected an Assembly, got {type(assembly).__name__}")
     fixed = _frame(assembly, frame)
