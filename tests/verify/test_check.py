@@ -158,6 +158,18 @@ def test_bad_input_names_the_block():
         Assembly.from_meshes([open_box])
 
 
+def test_self_intersecting_block_is_named():
+    cube = trimesh.creation.box(bounds=[[0, 0, 0], [1, 1, 1]])
+    crossing = trimesh.util.concatenate([trimesh.creation.box(bounds=[[2, 0, 0], [3, 1, 1]]),
+                                         trimesh.creation.box(bounds=[[2.5, 0.3, 0.2], [3.5, 1.3, 1.2]])])
+    with pytest.raises(OverlapError, match=r"block 1 \(1\) intersects itself: \d+ pairs of its triangles cross"):
+        check(Assembly.from_meshes([cube, crossing], frame=[0]))
+    # triangles that only share edges or corners do not cross: the modified cube has none
+    from interlock.verify.validate import self_intersections
+
+    assert len(self_intersections(presets.modified_cube())) == 0
+
+
 def test_verdict_serialises_and_prints():
     v = check(presets.cube_grid())
     record = v.to_dict()
