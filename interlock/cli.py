@@ -109,9 +109,19 @@ def _run_verify(args) -> int:
     from interlock.blocks import Assembly
     from interlock.verify import check
 
+    from tqdm import tqdm
+
+    from interlock.verify.check import STAGES
+
     paths = args.paths[0] if len(args.paths) == 1 else args.paths
     assembly = Assembly.load(paths, frame=_indices(args.fixed))
-    verdict = check(assembly, translational=args.translational, certify=args.certify)
+    stages = [s for s in STAGES if s != "certify" or args.certify]
+    with tqdm(total=len(stages), desc="verify", unit="stage", disable=None, leave=False) as bar:
+        def announce(stage):
+            bar.set_description(f"verify: {stage}")
+            bar.update(1)
+
+        verdict = check(assembly, translational=args.translational, certify=args.certify, progress=announce)
     if args.json:
         record = verdict.to_dict()
         record["blocks"] = [str(label) for label in assembly.labels]

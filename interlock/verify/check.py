@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import time
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -17,7 +18,7 @@ from interlock.verify.contacts import contacts as find_contacts
 from interlock.verify.matrix import InterlockingMatrix, interlocking_matrix
 from interlock.verify.validate import validate as check_overlaps
 
-__all__ = ["Verdict", "check", "RANK_RTOL", "RANK_CLEAR_RTOL", "LP_TOL", "MOVING_RTOL", "DENSE_COLUMNS"]
+__all__ = ["Verdict", "check", "RANK_RTOL", "RANK_CLEAR_RTOL", "LP_TOL", "MOVING_RTOL", "DENSE_COLUMNS", "STAGES"]
 
 #: A singular value at most ``RANK_RTOL * sigma_max`` is zero ...
 RANK_RTOL = 1e-9
@@ -29,6 +30,8 @@ GRAM_RESOLUTION = 1e-7
 LP_TOL = 1e-7
 #: Blocks whose twist is below this fraction of the largest one do not move.
 MOVING_RTOL = 1e-6
+#: The stages of :func:`check`, in order, as reported to its ``progress`` callback and in ``timings``.
+STAGES = ("validate", "contacts", "matrix", "rank", "lp", "certify")
 #: Up to this many columns the rank comes from a dense SVD; above, from sparse shift-invert eigensolves.
 DENSE_COLUMNS = 1200
 #: The sparse path looks for at most this many zero singular values (the kernel dimension is then a lower bound).
@@ -91,7 +94,8 @@ class Verdict:
 
 
 def check(assembly: Assembly, frame=None, translational: bool = False, certify: bool = False, *,
-          rank_rtol: float = RANK_RTOL, lp_tol: float = LP_TOL, contacts=None, validate: bool = True) -> Verdict:
+          rank_rtol: float = RANK_RTOL, lp_tol: float = LP_TOL, contacts=None, validate: bool = True,
+          progress=None) -> Verdict:
     """Decide whether the assembly is infinitesimally interlocked with the given frame.
 
     The assembly is infinitesimally interlocked (Def. 3.3) iff ``{x : A x >= 0} = {0}``
@@ -121,6 +125,8 @@ def check(assembly: Assembly, frame=None, translational: bool = False, certify: 
         Precomputed contacts (e.g. to check several frames).
     validate : bool
         First check that no two blocks overlap (:func:`~interlock.verify.validate.validate`).
+    progress : callable, optional
+        Called with the name of each stage as it starts (one of :data:`STAGES`).
 
     Notes
     -----
@@ -146,15 +152,12 @@ def check(assembly: Assembly, frame=None, translational: bool = False, certify: 
         raise InterlockError("the assembly has no blocks; there is nothing to check")
     timings = {}
     if validate:
-        start = time.perf_counter()
-        check_overlaps(assembly)
-        timings["validate"] = time.perf_counter() - start
-    start = time.perf_counter()
-    found = find_contacts(assembly) if contacts is None else tuple(contacts)
-    timings["contacts"] = time.perf_counter() - start
-    start = time.perf_counter()
-    A = interlocking_matrix(assembly, frame, translational, contacts=found)
-    timings["matrix"] = time.perf_counter() - start
+        with _stage(timings, "validate", progress):
+            check_overlaps(assembly)
+    with _stage(timings, "contacts", progress):
+        found = find_contacts(assembly) if contacts is None else tuple(contacts)
+    with _stage(timings, "matrix", progress):
+        A = interlocking_matrix(assembly, frame, translational, contacts=found)
     fixed = tuple(sorted(set(range(len(assembly))) - set(A.free.tolist())))
     tolerances = {"rank_rtol": rank_rtol, "rank_clear_rtol": RANK_CLEAR_RTOL, "lp_tol": lp_tol, "moving_rtol": MOVING_RTOL,
                   "length_scale": A.length_scale}
@@ -163,13 +166,11 @@ def check(assembly: Assembly, frame=None, translational: bool = False, certify: 
     if len(A.free) == 0:
         return Verdict(True, "every block is in the frame: nothing can move", rank=0, lp_value=0.0, **base)
 
-    start = time.perf_counter()
-    rank, kernel, rank_clear = _rank(A.matrix, rank_rtol)
-    timings["rank"] = time.perf_counter() - start
-    start = time.perf_counter()
-    stress = _positive_stress(A.matrix, lp_tol)
-    lp_value, lp_motion = (0.0, None) if stress is not None else _motion_lp(A.matrix, lp_tol)
-    timings["lp"] = time.perf_counter() - start
+    with _stage(timings, "rank", progress):
+        rank, kernel, rank_clear = _rank(A.matrix, rank_rtol)
+    with _stage(timings, "lp", progress):
+        stress = _positive_stress(A.matrix, lp_tol)
+        lp_value, lp_motion = (0.0, None) if stress is not None else _motion_lp(A.matrix, lp_tol)
 
     n = A.shape[1]
     no_frame = " (no frame: a finite assembly without fixed blocks can always move as a whole)" if not fixed else ""
@@ -194,10 +195,19 @@ def check(assembly: Assembly, frame=None, translational: bool = False, certify: 
     if certify:
         from interlock.verify.certify import certify_verdict
 
-        start = time.perf_counter()
-        verdict = certify_verdict(assembly, A, verdict)
-        timings["certify"] = time.perf_counter() - start
+        with _stage(timings, "certify", progress):
+            verdict = certify_verdict(assembly, A, verdict)
     return verdict
+
+
+@contextmanager
+def _stage(timings: dict, name: str, progress):
+    """Time one stage of :func:`check` into ``timings[name]``, announcing it to ``progress`` first."""
+    if progress is not None:
+        progress(name)
+    start = time.perf_counter()
+    yield
+    timings[name] = time.perf_counter() - start
 
 
 # --- numerics ---------------------------------------------------------------------

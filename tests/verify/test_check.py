@@ -170,6 +170,17 @@ def test_self_intersecting_block_is_named():
     assert len(self_intersections(presets.modified_cube())) == 0
 
 
+def test_progress_reports_every_stage_in_order():
+    seen = []
+    v = check(presets.interlocking_cubes(), certify=True, progress=seen.append)
+    from interlock.verify.check import STAGES
+
+    assert tuple(seen) == STAGES and tuple(v.timings) == STAGES
+    seen.clear()
+    check(presets.cube_grid(), validate=False, progress=seen.append)
+    assert seen == ["contacts", "matrix", "rank", "lp"]
+
+
 def test_verdict_serialises_and_prints():
     v = check(presets.cube_grid())
     record = v.to_dict()
