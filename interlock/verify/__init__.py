@@ -10,6 +10,8 @@ not infinitesimally interlocked: block 4 has a first-order motion that keeps eve
 
 from interlock.verify.check import Verdict, check
 from interlock.verify.contacts import Contact, contacts
+from interlock.verify.criterion import CriterionResult, criterion_4_3
 from interlock.verify.matrix import InterlockingMatrix, interlocking_matrix
 
-__all__ = ["Contact", "contacts", "InterlockingMatrix", "interlocking_matrix", "Verdict", "check"]
+__all__ = ["Contact", "contacts", "CriterionResult", "criterion_4_3", "InterlockingMatrix", "interlocking_matrix",
+           "Verdict", "check"]
