@@ -37,7 +37,7 @@ def _naive_verdict(assembly):
     found = contacts(everything)
     A = interlocking_matrix(everything, contacts=found)
     rank = np.linalg.matrix_rank(A.matrix.toarray())
-    stress = _positive_stress(A.matrix, 1e-7)
+    stress, _ = _positive_stress(A.matrix, 1e-7)
     return stress is not None and rank == A.shape[1]
 
 

@@ -18,7 +18,8 @@ from interlock.verify.contacts import contacts as find_contacts
 from interlock.verify.matrix import InterlockingMatrix, interlocking_matrix
 from interlock.verify.validate import validate as check_overlaps
 
-__all__ = ["Verdict", "check", "RANK_RTOL", "RANK_CLEAR_RTOL", "LP_TOL", "MOVING_RTOL", "DENSE_COLUMNS", "STAGES"]
+__all__ = ["Verdict", "check", "STAGES", "RANK_RTOL", "RANK_CLEAR_RTOL", "GRAM_RESOLUTION", "LP_TOL", "LARGE_LP_ROWS",
+           "MOVING_RTOL", "DENSE_COLUMNS", "MAX_KERNEL_PROBE", "INVERSE_ITERATIONS"]
 
 #: A singular value at most ``RANK_RTOL * sigma_max`` is zero ...
 RANK_RTOL = 1e-9
@@ -35,7 +36,7 @@ LARGE_LP_ROWS = 30_000
 MOVING_RTOL = 1e-6
 #: The stages of :func:`check`, in order, as reported to its ``progress`` callback and in ``timings``.
 STAGES = ("validate", "contacts", "matrix", "rank", "lp", "certify")
-#: Up to this many columns the rank comes from a dense SVD; above, from sparse shift-invert eigensolves.
+#: Up to this many columns the rank comes from a dense SVD; above, from block inverse iteration on A^T A.
 DENSE_COLUMNS = 1200
 #: The sparse path looks for at most this many zero singular values (the kernel dimension is then a lower bound).
 MAX_KERNEL_PROBE = 256
