@@ -170,17 +170,18 @@ def test_self_intersecting_block_is_named():
     assert len(self_intersections(presets.modified_cube())) == 0
 
 
-def test_large_problem_lp_backend_gives_the_same_verdicts(monkeypatch):
-    import sys
-
-    monkeypatch.setattr(sys.modules["interlock.verify.check"], "LARGE_LP_ROWS", 1)  # route every LP to Clarabel
-    v = check(presets.interlocking_cubes(), certify=True)
-    assert v.interlocked is True and v.certified and v.tolerances["lp_solver"] == "clarabel"
+@pytest.mark.parametrize("solver,used", [("clarabel", "clarabel"), ("highs", "highs-ipm")])
+def test_both_lp_solvers_give_the_same_verdicts(solver, used):
+    v = check(presets.interlocking_cubes(), certify=True, lp_solver=solver)
+    assert v.interlocked is True and v.certified and v.tolerances["lp_solver"] == used
     corner = [trimesh.creation.box(bounds=b) for b in ([[0, 0, 0], [1, 1, 1]], [[-1, -1, -1], [2, 2, 0]],
                                                         [[-1, 0, 0], [0, 1, 1]], [[0, -1, 0], [1, 0, 1]])]
-    freed = check(Assembly.from_meshes(corner, frame=[1, 2, 3]))  # full rank, no stress: Clarabel reports infeasible
+    freed = check(Assembly.from_meshes(corner, frame=[1, 2, 3]), lp_solver=solver)  # full rank and no stress
     assert freed.interlocked is False and freed.motion_kind == "opening" and freed.moving == (0,)
     assert freed.rank == 6 and (freed.motion[0, 3:] >= -1e-9).all()  # it leaves the corner outwards
+    assert freed.tolerances["lp_solver"] == used
+    with pytest.raises(InterlockError, match="unknown lp_solver 'cplex'"):
+        check(presets.cube_grid(), lp_solver="cplex")
 
 
 def test_progress_reports_every_stage_in_order():
