@@ -12,6 +12,7 @@ from interlock.verify.check import Verdict, check
 from interlock.verify.contacts import Contact, contacts
 from interlock.verify.criterion import CriterionResult, criterion_4_3
 from interlock.verify.matrix import InterlockingMatrix, interlocking_matrix
+from interlock.verify.periodic import PeriodicVerdict, edge_quadruples, periodic_check, symbol
 
 __all__ = ["Contact", "contacts", "CriterionResult", "criterion_4_3", "InterlockingMatrix", "interlocking_matrix",
-           "Verdict", "check"]
+           "Verdict", "check", "PeriodicVerdict", "edge_quadruples", "periodic_check", "symbol"]
