@@ -70,6 +70,24 @@ def _parser() -> argparse.ArgumentParser:
     verify.add_argument("--certify", action="store_true", help="re-check the verdict rigorously")
     verify.add_argument("--json", action="store_true", help="print JSON instead of text")
     verify.set_defaults(run=_run_verify)
+
+    periodic = commands.add_parser(
+        "periodic", help="decide whether an infinite periodic assembly interlocks (one cell, Sec. 4.1)",
+        description="Decide interlocking of the infinite assembly of an Escher block (a wallpaper group with "
+                    "deformed edges) or of RhomBlocks on a periodic staircase tiling, from one cell.",
+    )
+    periodic.add_argument("group", nargs="?", help="wallpaper group of an Escher block, e.g. p4")
+    periodic.add_argument("--deform", action="append", default=[], metavar="EDGE:X,Y[;X,Y...]",
+                          help="intermediate points of one edge (repeat for more edges), e.g. 0:0.25,0.1")
+    periodic.add_argument("--height", type=float, default=1.0, help="block height (default 1)")
+    periodic.add_argument("--a", type=float, default=1.0, help="cell edge a (default 1)")
+    periodic.add_argument("--b", type=float, default=None, help="cell edge b")
+    periodic.add_argument("--gamma", type=float, default=None, help="cell angle in degrees")
+    periodic.add_argument("--staircase", metavar="N0,N1,N2", help="RhomBlocks on the staircase tiling with these counts")
+    periodic.add_argument("--variant", type=int, default=0, choices=(0, 1), help="RhomBlock assembly variant")
+    periodic.add_argument("--translational", action="store_true", help="translations only")
+    periodic.add_argument("--json", action="store_true", help="print JSON instead of text")
+    periodic.set_defaults(run=_run_periodic)
     return parser
 
 
@@ -138,6 +156,54 @@ def _run_verify(args) -> int:
     timings = ", ".join(f"{name} {seconds:.3f}s" for name, seconds in verdict.timings.items())
     print(f"timings: {timings}")
     return 0
+
+
+def _run_periodic(args) -> int:
+    from interlock.blocks import escher_block, periodic_cell, rhomblock_assembly, staircase
+    from interlock.verify import criterion_4_3, periodic_check
+
+    if (args.group is None) == (args.staircase is None):
+        raise InterlockError("give either a wallpaper group (with --deform) or --staircase N0,N1,N2, not both or neither")
+    criterion = None
+    if args.staircase is not None:
+        cell = rhomblock_assembly(staircase(_numbers(args.staircase, int, "--staircase")), args.variant)
+    else:
+        group = wallpaper.group(args.group, a=args.a, b=args.b, gamma=args.gamma)
+        block = escher_block(group, dict(_edge_points(text) for text in args.deform), height=args.height)
+        cell = periodic_cell(block)
+        criterion = criterion_4_3(block)
+    verdict = periodic_check(cell, translational=args.translational)
+    if args.json:
+        record = verdict.to_dict()
+        record["criterion_4_3"] = None if criterion is None else criterion.to_dict()
+        print(json.dumps(record, indent=2))
+        return 0
+    print(verdict)
+    if criterion is not None:
+        print(criterion)
+    if verdict.moving:
+        print(f"moving cell blocks: {list(verdict.moving)}; motion (omega, t) per block:")
+        for b in verdict.moving:
+            print("  ", " ".join(f"{x:+.4f}" for x in verdict.motion[b]))
+    return 0
+
+
+def _edge_points(text: str):
+    """'0:0.25,0.1;0.4,0.2' -> (0, [(0.25, 0.1), (0.4, 0.2)])."""
+    edge, colon, rest = text.partition(":")
+    if not colon or not edge.strip().isdigit():
+        raise InterlockError(f"cannot read --deform {text!r}: use EDGE:X,Y[;X,Y...], e.g. 0:0.25,0.1")
+    points = [_numbers(point, float, "--deform") for point in rest.split(";") if point.strip()]
+    if any(len(p) != 2 for p in points):
+        raise InterlockError(f"cannot read --deform {text!r}: every point needs two coordinates X,Y")
+    return int(edge), points
+
+
+def _numbers(text: str, kind, flag: str) -> list:
+    try:
+        return [kind(part) for part in text.split(",")]
+    except ValueError:
+        raise InterlockError(f"cannot read {flag} {text!r}: expected comma-separated numbers") from None
 
 
 def _indices(text: str) -> list[int]:

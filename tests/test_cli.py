@@ -91,3 +91,28 @@ def test_verify_overlapping_blocks_is_one_line(tmp_path):
                          capture_output=True, text=True)
     assert run.returncode == 2 and "Traceback" not in run.stderr
     assert "blocks 0 (cube0.stl) and 1 (cube1.stl) overlap" in run.stderr
+
+
+def test_periodic_escher_and_rhomblock(capsys):
+    assert main(["periodic", "p4", "--deform", "0:0.25,0.1", "--deform", "1:0.4,0.25"]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("interlocked:") and "Criterion 4.3 holds for p4" in out
+    assert main(["periodic", "p4", "--deform", "0:0.25,0.1", "--json"]) == 0
+    record = json.loads(capsys.readouterr().out)
+    assert record["status"] == "not interlocked" and record["moving"] == [0, 1, 2, 3]
+    assert record["criterion_4_3"]["holds"] is False and len(record["criterion_4_3"]["witness"]) == 4
+    assert main(["periodic", "--staircase", "1,1,0", "--variant", "1"]) == 0
+    assert capsys.readouterr().out.startswith("interlocked:")
+
+
+@pytest.mark.parametrize("argv,message", [
+    (["periodic", "p4", "--deform", "0:0.25"], "every point needs two coordinates"),
+    (["periodic", "p4", "--staircase", "1,0,0"], "give either a wallpaper group"),
+    (["periodic", "p6", "--deform", "7:0.1,0.1"], "edge 7 does not exist"),
+    (["periodic", "--staircase", "1,x,0"], "expected comma-separated numbers"),
+])
+def test_periodic_bad_input_is_one_line(argv, message):
+    run = subprocess.run([sys.executable, "-m", "interlock", *argv], capture_output=True, text=True)
+    assert run.returncode == 2 and "Traceback" not in run.stderr
+    lines = run.stderr.strip().splitlines()
+    assert len(lines) == 1 and message in lines[0]

@@ -15,10 +15,10 @@ from interlock.errors import InterlockError
 from interlock.verify.contacts import contacts
 
 __all__ = ["EdgeQuadruple", "Symbol", "PeriodicVerdict", "edge_quadruples", "symbol", "periodic_check",
-           "OFFSET_REACH", "KERNEL_RTOL", "STRESS_TOL"]
+           "EXTENT_SLACK", "KERNEL_RTOL", "STRESS_TOL"]
 
-#: Translates of the cell within this many lattice steps are searched for contacts.
-OFFSET_REACH = 2
+#: Slack (in lattice steps) on the cell's extent when choosing which translates can touch it.
+EXTENT_SLACK = 1e-9
 #: Singular values of A(z) below this (relative) span its kernel at a torus point.
 KERNEL_RTOL = 1e-9
 #: Stress weights above this count as positive (rows that are forced closed).
@@ -101,7 +101,8 @@ def edge_quadruples(cell: Assembly) -> tuple[EdgeQuadruple, ...]:
     """
     lattice = _lattice(cell)
     k = len(cell)
-    offsets = [(a, b) for a in range(-OFFSET_REACH, OFFSET_REACH + 1) for b in range(-OFFSET_REACH, OFFSET_REACH + 1)]
+    reach = _reach(cell, lattice)
+    offsets = [(a, b) for a in range(-reach, reach + 1) for b in range(-reach, reach + 1)]
     transforms, types = [], []
     for a, b in offsets:
         shift = np.eye(4)
@@ -135,24 +136,24 @@ def symbol(cell: Assembly, translational: bool = False, quadruples=None) -> Symb
     size = 3 if translational else 6
     length = float(np.linalg.norm(lattice, axis=1).max())
     centroids = cell.centroids
-    rows_of = {}
-    count = 0
-    for q in quadruples:
-        points = q.points[:1] if translational else q.points
-        shift = q.offset[0] * lattice[0] + q.offset[1] * lattice[1]
-        for p in points:
-            own = _entries(p - centroids[q.i], q.normal, length, translational)
-            other = _entries(p - centroids[q.j] - shift, q.normal, length, translational)
-            rows_of.setdefault((0, 0), []).append((count, q.i, -own))
-            rows_of.setdefault(tuple(q.offset), []).append((count, q.j, other))
-            count += 1
-    terms = {}
-    for delta, entries in rows_of.items():
-        r = np.repeat([e[0] for e in entries], size)
-        c = np.concatenate([size * e[1] + np.arange(size) for e in entries])
-        v = np.concatenate([e[2] for e in entries])
-        terms[delta] = sp.csr_matrix((v, (r, c)), shape=(count, size * len(cell)))
-    return Symbol(terms, count, size * len(cell), translational)
+    points = [q.points[:1] if translational else q.points for q in quadruples]
+    counts = np.array([len(p) for p in points], dtype=int)
+    p = np.vstack(points) if points else np.empty((0, 3))
+    n = np.repeat([q.normal for q in quadruples], counts, axis=0).reshape(-1, 3)
+    i = np.repeat([q.i for q in quadruples], counts).astype(int)
+    j = np.repeat([q.j for q in quadruples], counts).astype(int)
+    offsets = np.repeat([q.offset for q in quadruples], counts, axis=0).reshape(-1, 2)
+    shift = offsets @ lattice
+    own = -_entries(p - centroids[i], n, length, translational)
+    other = _entries(p - centroids[j] - shift, n, length, translational)
+    rows = np.arange(len(p))
+    columns = size * len(cell)
+    terms = {(0, 0): _rows_matrix(rows, i, own, size, len(p), columns)}
+    for delta in {tuple(o) for o in offsets.tolist()}:
+        mask = np.all(offsets == delta, axis=1)
+        term = _rows_matrix(rows[mask], j[mask], other[mask], size, len(p), columns)
+        terms[delta] = terms[delta] + term if delta in terms else term
+    return Symbol(terms, len(p), columns, translational)
 
 
 def periodic_check(cell: Assembly, translational: bool = False, seed: int = 0) -> PeriodicVerdict:
@@ -189,7 +190,7 @@ def periodic_check(cell: Assembly, translational: bool = False, seed: int = 0) -
     generic_rank = n - _kernel(at_points[0]).shape[1]
     basis = np.eye(n)  # the admissible cell motions P, as orthonormal columns
     forced = np.zeros(A.rows, dtype=bool)
-    tolerances = {"kernel_rtol": KERNEL_RTOL, "stress_tol": STRESS_TOL, "offset_reach": OFFSET_REACH, "seed": seed}
+    tolerances = {"kernel_rtol": KERNEL_RTOL, "stress_tol": STRESS_TOL, "seed": seed}
     verdict, motion = None, None
     for rounds in range(1, _ROUNDS + 1):
         new = _forced_rows(at_one @ basis, STRESS_TOL)
@@ -240,9 +241,27 @@ def _lattice(cell: Assembly) -> np.ndarray:
 
 
 def _entries(r, n, length, translational) -> np.ndarray:
+    """Row entries ``(r x n, n)`` (or ``n``) for many points at once, shape (points, 6 or 3)."""
     if translational:
         return np.asarray(n, dtype=float)
-    return np.concatenate([np.cross(r / length, n), n])
+    return np.hstack([np.cross(r / length, n), n])
+
+
+def _rows_matrix(rows, blocks, entries, size, count, columns) -> sp.csr_matrix:
+    r = np.repeat(rows, size)
+    c = (size * blocks[:, None] + np.arange(size)).ravel()
+    return sp.csr_matrix((entries.ravel(), (r, c)), shape=(count, columns))
+
+
+def _reach(cell: Assembly, lattice: np.ndarray) -> int:
+    """The largest ``|delta|`` (lattice steps) for which a block of cell ``delta`` can touch one of cell 0.
+
+    A common point ``x`` of block ``i`` and of block ``j`` moved by ``delta``
+    puts ``delta`` within the cell's extent in lattice coordinates.
+    """
+    coordinates = cell.bounds.reshape(-1, 3) @ np.linalg.pinv(lattice)
+    extent = float((coordinates.max(axis=0) - coordinates.min(axis=0)).max())
+    return int(np.floor(extent + EXTENT_SLACK))
 
 
 def _forced_rows(M: np.ndarray, tol: float) -> np.ndarray:
