@@ -52,9 +52,7 @@ def _parser() -> argparse.ArgumentParser:
         "group", help="show one wallpaper group: lattice, fundamental domain and side pairings"
     )
     one.add_argument("name", help="short symbol, e.g. p6 or p4g")
-    one.add_argument("--a", type=float, default=1.0, help="cell edge a (default 1)")
-    one.add_argument("--b", type=float, default=None, help="cell edge b (default: a)")
-    one.add_argument("--gamma", type=float, default=None, help="cell angle in degrees (default: the crystal system's)")
+    _lattice_arguments(one)
     one.add_argument("--json", action="store_true", help="print JSON instead of text")
     one.set_defaults(run=_run_group)
 
@@ -80,15 +78,19 @@ def _parser() -> argparse.ArgumentParser:
     periodic.add_argument("--deform", action="append", default=[], metavar="EDGE:X,Y[;X,Y...]",
                           help="intermediate points of one edge (repeat for more edges), e.g. 0:0.25,0.1")
     periodic.add_argument("--height", type=float, default=1.0, help="block height (default 1)")
-    periodic.add_argument("--a", type=float, default=1.0, help="cell edge a (default 1)")
-    periodic.add_argument("--b", type=float, default=None, help="cell edge b")
-    periodic.add_argument("--gamma", type=float, default=None, help="cell angle in degrees")
+    _lattice_arguments(periodic)
     periodic.add_argument("--staircase", metavar="N0,N1,N2", help="RhomBlocks on the staircase tiling with these counts")
     periodic.add_argument("--variant", type=int, default=0, choices=(0, 1), help="RhomBlock assembly variant")
     periodic.add_argument("--translational", action="store_true", help="translations only")
     periodic.add_argument("--json", action="store_true", help="print JSON instead of text")
     periodic.set_defaults(run=_run_periodic)
     return parser
+
+
+def _lattice_arguments(parser) -> None:
+    parser.add_argument("--a", type=float, default=1.0, help="cell edge a (default 1)")
+    parser.add_argument("--b", type=float, default=None, help="cell edge b (default: a)")
+    parser.add_argument("--gamma", type=float, default=None, help="cell angle in degrees (default: the crystal system's)")
 
 
 def _group_record(g: wallpaper.WallpaperGroup) -> dict:
