@@ -13,12 +13,15 @@ import trimesh
 
 from interlock.errors import InterlockError
 
-__all__ = ["Assembly", "AssemblyError", "NEIGHBOUR_RTOL", "RIGID_TOL"]
+__all__ = ["Assembly", "AssemblyError", "NEIGHBOUR_RTOL", "RIGID_TOL", "KIND_DECIMALS"]
 
 #: Bounding boxes closer than this (relative to the model size) count as touching.
 NEIGHBOUR_RTOL = 1e-6
 #: Allowed deviation of a transform's linear part from an orthogonal matrix.
 RIGID_TOL = 1e-9
+#: Pairs of blocks whose relative transforms agree to this many decimals (lengths over the model size)
+#: are of one kind (:meth:`Assembly.pair_kinds`).
+KIND_DECIMALS = 9
 
 
 class AssemblyError(InterlockError):
@@ -62,8 +65,14 @@ class Assembly:
     """
 
     def __init__(self, meshes, types, transforms, labels=None, frame=(), lattice=None, boundary=None, info=None):
-        self.meshes: tuple[trimesh.Trimesh, ...] = tuple(_checked_mesh(m, f"mesh {i}") for i, m in enumerate(meshes))
+        meshes = list(meshes)
         types = np.asarray(types, dtype=int).reshape(-1)
+        self.labels: tuple = tuple(range(len(types))) if labels is None else tuple(labels)
+        if len(self.labels) != len(types):
+            raise AssemblyError(f"got {len(self.labels)} labels for {len(types)} blocks")
+        one_mesh_per_block = len(meshes) == len(types) and bool(np.array_equal(types, np.arange(len(types))))
+        self.meshes: tuple[trimesh.Trimesh, ...] = tuple(
+            _checked_mesh(m, _mesh_name(k, labels, one_mesh_per_block)) for k, m in enumerate(meshes))
         if types.size and (types.min() < 0 or types.max() >= len(self.meshes)):
             raise AssemblyError(f"block types must index the {len(self.meshes)} meshes, got values {types.min()}..{types.max()}")
         transforms = np.asarray(transforms, dtype=float).reshape(-1, 4, 4)
@@ -74,12 +83,9 @@ class Assembly:
         transforms.setflags(write=False)
         self.types = types
         self.transforms = transforms
-        self.labels: tuple = tuple(range(len(types))) if labels is None else tuple(labels)
-        if len(self.labels) != len(types):
-            raise AssemblyError(f"got {len(self.labels)} labels for {len(types)} blocks")
-        self.frame: tuple[int, ...] = self._indices(frame, "frame")
+        self.frame: tuple[int, ...] = self.block_indices(frame, "frame")
         self.lattice = None if lattice is None else _checked_lattice(lattice)
-        self._boundary = None if boundary is None else self._indices(boundary, "boundary")
+        self._boundary = None if boundary is None else self.block_indices(boundary, "boundary")
         self.info = dict(info or {})
 
     # --- constructors ----------------------------------------------------------
@@ -87,9 +93,6 @@ class Assembly:
     def from_meshes(cls, meshes: Sequence[trimesh.Trimesh], frame=(), labels=None, info=None) -> Assembly:
         """One block per closed mesh, placed where it is (identity transforms)."""
         meshes = list(meshes)
-        names = labels if labels is not None and len(labels) == len(meshes) else range(len(meshes))
-        meshes = [_checked_mesh(m, f"block {k} ({name})" if labels is not None else f"block {k}")
-                  for k, (m, name) in enumerate(zip(meshes, names))]
         return cls(meshes, range(len(meshes)), np.tile(np.eye(4), (len(meshes), 1, 1)), labels, frame, info=info)
 
     @classmethod
@@ -231,8 +234,35 @@ class Assembly:
         return tuple(i for i, m in enumerate(meshes)
                      if (shapely.distance(shapely.points(m.vertices @ plane.T), ring) <= tol).any())
 
-    # --- internals -----------------------------------------------------------------
-    def _indices(self, values, what) -> tuple[int, ...]:
+    def pair_kinds(self, pairs) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Group block pairs by kind: their two block types and relative transform ``T_i^-1 T_j``.
+
+        Anything computed from the two meshes in each other's frame (contacts,
+        overlaps) depends only on the kind, so instanced patches need one
+        computation per kind.  Transforms are compared to
+        :data:`KIND_DECIMALS` decimals, lengths over the model size.
+
+        Returns
+        -------
+        first : ndarray of int
+            Index (into ``pairs``) of one representative pair per kind.
+        kind_of : ndarray of int
+            The kind of every pair.
+        relative : ndarray (len(pairs), 4, 4)
+            ``T_i^-1 T_j`` of every pair.
+        """
+        pairs = np.asarray(pairs, dtype=int).reshape(-1, 2)
+        i, j = pairs.T
+        relative = np.linalg.inv(self.transforms[i]) @ self.transforms[j]
+        shape = relative[:, :3].copy()
+        shape[:, :, 3] /= self.scale
+        key = np.hstack([self.types[i, None], self.types[j, None],
+                         np.round(shape.reshape(-1, 12), KIND_DECIMALS) + 0.0])
+        _, first, kind_of = np.unique(key, axis=0, return_index=True, return_inverse=True)
+        return first, kind_of.ravel(), relative
+
+    def block_indices(self, values, what: str = "frame") -> tuple[int, ...]:
+        """Sorted distinct block indices; a clear :class:`AssemblyError` for anything else."""
         values = [] if values is None else list(values)
         out = []
         for v in values:
@@ -242,6 +272,13 @@ class Assembly:
                 raise AssemblyError(f"{what} index {v} is out of range for {len(self.types)} blocks")
             out.append(int(v))
         return tuple(sorted(set(out)))
+
+
+def _mesh_name(k: int, labels, one_mesh_per_block: bool) -> str:
+    """How error messages name mesh ``k``: by its block (and label) when every block has its own mesh."""
+    if not one_mesh_per_block:
+        return f"mesh {k}"
+    return f"block {k} ({labels[k]})" if labels is not None else f"block {k}"
 
 
 def _checked_mesh(mesh, name) -> trimesh.Trimesh:

@@ -42,9 +42,8 @@ DEFAULT_AREA_RTOL = 1e-10
 #: in plain floating point, GEOS can return a whole square as the overlap of two squares that only
 #: share an edge with 1e-16 noise.
 OVERLAY_GRID_RTOL = 1e-13
-#: Instanced pairs with equal relative transforms (to this many decimals, lengths over the model size)
-#: share one contact computation; it is used when kinds are at most this share of the pairs.
-KIND_DECIMALS = 9
+#: Instanced pairs of one kind (:meth:`Assembly.pair_kinds`) share one contact computation; that path is
+#: taken when kinds are at most this share of the pairs.
 KIND_SHARE = 0.5
 
 # Floor for tolerances of zero in the spatial index (relative; keeps its metric finite).
@@ -218,19 +217,19 @@ def contacts(assembly: Assembly, rtol: float = DEFAULT_CONTACT_RTOL, angle_tol: 
     pairs = np.array(sorted((min(u, v), max(u, v)) for u, v in graph.edges if u != v), dtype=int).reshape(-1, 2)
     if not len(pairs):
         return ()
-    kinds, kind_of = _pair_kinds(assembly, pairs)
+    kinds, kind_of, relative = assembly.pair_kinds(pairs)
     if len(kinds) > KIND_SHARE * len(pairs):
         return _pair_contacts(assembly, pairs, scale, rtol, angle_tol, area_rtol)
     # instanced blocks: one computation per kind of pair, on a stand-in of two blocks, moved to every pair
     i, j = pairs[kinds].T
-    relative = np.linalg.inv(assembly.transforms[i]) @ assembly.transforms[j]
+    relative = relative[kinds]
     stand_in = Assembly(assembly.meshes, np.column_stack([assembly.types[i], assembly.types[j]]).ravel(),
                         np.stack([np.broadcast_to(np.eye(4), relative.shape), relative], axis=1).reshape(-1, 4, 4))
     local = _pair_contacts(stand_in, np.arange(2 * len(kinds)).reshape(-1, 2), scale, rtol, angle_tol, area_rtol)
     by_kind = {}
     for contact in local:
         by_kind.setdefault(contact.i // 2, []).append(contact)
-    found = [_moved(contact, int(a), int(b), assembly.transforms[a])
+    found = [_moved(contact, int(a), int(b), assembly.transforms[a], assembly.mirrored[a])
              for (a, b), k in zip(pairs, kind_of) for contact in by_kind.get(int(k), ())]
     return tuple(sorted(found, key=lambda c: (c.i, c.j, c.facet_i, c.facet_j)))
 
@@ -243,23 +242,12 @@ def _pair_contacts(assembly, pairs, scale, rtol, angle_tol, area_rtol) -> tuple[
     return _overlaps(table, gi, gj, rtol * scale, area_rtol * scale**2, grid)
 
 
-def _pair_kinds(assembly, pairs):
-    """Representative pair of each kind (types and relative transform), and the kind of every pair."""
-    i, j = pairs.T
-    relative = np.linalg.inv(assembly.transforms[i]) @ assembly.transforms[j]
-    relative[:, :3, 3] /= assembly.scale
-    key = np.hstack([assembly.types[i, None], assembly.types[j, None],
-                     np.round(relative[:, :3].reshape(len(pairs), -1), KIND_DECIMALS) + 0.0])
-    _, first, kind_of = np.unique(key, axis=0, return_index=True, return_inverse=True)
-    return first, kind_of.ravel()
-
-
-def _moved(contact: Contact, i: int, j: int, transform: np.ndarray) -> Contact:
+def _moved(contact: Contact, i: int, j: int, transform: np.ndarray, mirrored: bool) -> Contact:
     """A contact computed with block i at the origin, placed for blocks i, j (block i moved by ``transform``)."""
     rotation, shift = transform[:3, :3], transform[:3, 3]
     basis, origin = contact.basis @ rotation.T, rotation @ contact.origin + shift
     polygon, vertices = contact.polygon, contact.vertices @ rotation.T + shift
-    if np.linalg.det(rotation) < 0:  # keep u x v = n and counter-clockwise rings: flip v and the polygon's y
+    if mirrored:  # keep u x v = n and counter-clockwise rings: flip v and the polygon's y
         basis = basis * np.array([[1.0], [-1.0]])
         polygon = shapely.orient_polygons(shapely.transform(polygon, lambda xy: xy * [1.0, -1.0]))
         xy, ring = shapely.get_coordinates(shapely.get_rings(polygon), return_index=True)

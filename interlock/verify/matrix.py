@@ -186,4 +186,4 @@ def _distinct_rows(col_i, col_j, values_i, values_j) -> np.ndarray:
 def _frame(assembly: Assembly, frame) -> set[int]:
     if frame is None:
         return set(assembly.frame)
-    return set(assembly.with_frame(frame).frame)  # validates indices with a clear message
+    return set(assembly.block_indices(frame, "frame"))

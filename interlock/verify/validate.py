@@ -12,7 +12,6 @@ __all__ = ["OverlapError", "overlaps", "self_intersections", "validate", "OVERLA
 #: Two blocks overlap when their common volume exceeds this fraction of the smaller one; it matches
 #: the contacts' angular tolerance (a face tilted by 1e-4 rad overlaps its neighbour in a wedge of ~1e-4 x volume).
 OVERLAP_RTOL = 1e-4
-_KEY_DECIMALS = 9
 #: An edge crosses a triangle only if it passes this far (relative to the mesh size) inside both.
 CROSSING_RTOL = 1e-9
 
@@ -37,19 +36,18 @@ def overlaps(assembly: Assembly, rtol: float = OVERLAP_RTOL) -> list[tuple[int, 
     import manifold3d
 
     solids = [_solid(manifold3d, mesh, k) for k, mesh in enumerate(assembly.meshes)]
-    inverse = np.linalg.inv(assembly.transforms)
-    cache: dict[tuple, float] = {}
+    pairs = np.array(sorted(assembly.neighbours.edges), dtype=int).reshape(-1, 2)
+    first, kind_of, relative = assembly.pair_kinds(pairs)
+    of_kind = []
+    for r in first:
+        i, j = pairs[r]
+        moved = solids[assembly.types[j]].transform(relative[r][:3, :])
+        of_kind.append(float((solids[assembly.types[i]] ^ moved).volume()))
     found = []
-    for i, j in sorted(assembly.neighbours.edges):
-        relative = inverse[i] @ assembly.transforms[j]
-        key = (int(assembly.types[i]), int(assembly.types[j]),
-               tuple(np.round(relative / assembly.scale, _KEY_DECIMALS).ravel() + 0.0))
-        if key not in cache:
-            other = solids[assembly.types[j]].transform(relative[:3, :])
-            cache[key] = float((solids[assembly.types[i]] ^ other).volume())
-        volume = cache[key]
+    for (i, j), kind in zip(pairs.tolist(), kind_of):
+        volume = of_kind[kind]
         if volume > rtol * min(assembly.volumes[i], assembly.volumes[j]):
-            found.append((int(i), int(j), volume))
+            found.append((int(i), int(j), float(volume)))
     return found
 
 

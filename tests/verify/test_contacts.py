@@ -335,7 +335,7 @@ def test_instanced_pairs_share_one_computation_per_kind(which):
     else:
         assembly = patch(escher_block(wallpaper.group("pg"), {0: [(0.25, 0.1)]}), 2.0)
     pairs = np.array(sorted(assembly.neighbours.edges))
-    kinds, _ = module._pair_kinds(assembly, pairs)
+    kinds, _, _ = assembly.pair_kinds(pairs)
     assert len(kinds) <= module.KIND_SHARE * len(pairs)  # the shared path is the one taken
     shared = contacts(assembly)
     direct = module._pair_contacts(assembly, pairs, assembly.scale, module.DEFAULT_CONTACT_RTOL,
