@@ -184,9 +184,10 @@ def _run_periodic(args) -> int:
     if criterion is not None:
         print(criterion)
     if verdict.moving:
-        print(f"moving cell blocks: {list(verdict.moving)}; motion (omega, t) per block:")
+        print("moving blocks (a, b, i: block i of the cell shifted by a v1 + b v2); motion (omega, t):")
         for b in verdict.moving:
-            print("  ", " ".join(f"{x:+.4f}" for x in verdict.motion[b]))
+            a, c, i = verdict.motion_blocks[b]
+            print(f"   ({a:+d}, {c:+d}, {i})", " ".join(f"{x:+.4f}" for x in verdict.motion[b]))
     return 0
 
 

@@ -11,9 +11,10 @@ from interlock.blocks.assembly import Assembly, AssemblyError
 from interlock.blocks.escher import Block, DeformationError, escher_block
 from interlock.blocks import presets
 from interlock.blocks.lozenge import Lozenge, LozengeTiling, TilingError, random_hexagon, staircase
-from interlock.blocks.orbits import patch, periodic_cell
+from interlock.blocks.orbits import cell_patch, cell_reach, patch, periodic_cell
 from interlock.blocks.rhomblock import rhomblock, rhomblock_assembly
 
 __all__ = ["Assembly", "AssemblyError", "Block", "DeformationError", "escher_block", "patch", "periodic_cell",
+           "cell_patch", "cell_reach",
            "presets", "Lozenge", "LozengeTiling", "TilingError", "random_hexagon", "staircase", "rhomblock",
            "rhomblock_assembly"]

@@ -137,7 +137,7 @@ class Facets:
 
 
 def contacts(assembly: Assembly, rtol: float = DEFAULT_CONTACT_RTOL, angle_tol: float = DEFAULT_ANGLE_TOL,
-             area_rtol: float = DEFAULT_AREA_RTOL) -> tuple[Contact, ...]:
+             area_rtol: float = DEFAULT_AREA_RTOL, involving=None) -> tuple[Contact, ...]:
     """All face-to-face contacts between the blocks of an assembly.
 
     Two blocks are in contact where a facet of one and a facet of the other
@@ -164,6 +164,8 @@ def contacts(assembly: Assembly, rtol: float = DEFAULT_CONTACT_RTOL, angle_tol: 
     area_rtol : float, optional
         Overlaps of area at most ``area_rtol * scale**2`` are dropped (default
         ``DEFAULT_AREA_RTOL`` = 1e-10).
+    involving : iterable of int, optional
+        Only contacts of which at least one block is among these (default: all).
 
     Returns
     -------
@@ -215,6 +217,8 @@ def contacts(assembly: Assembly, rtol: float = DEFAULT_CONTACT_RTOL, angle_tol: 
     scale = assembly.scale
     graph = assembly.neighbours if rtol <= NEIGHBOUR_RTOL else assembly.neighbour_graph(rtol)
     pairs = np.array(sorted((min(u, v), max(u, v)) for u, v in graph.edges if u != v), dtype=int).reshape(-1, 2)
+    if involving is not None:
+        pairs = pairs[np.isin(pairs, assembly.block_indices(involving, "involving")).any(axis=1)]
     if not len(pairs):
         return ()
     kinds, kind_of, relative = assembly.pair_kinds(pairs)

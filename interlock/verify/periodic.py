@@ -9,20 +9,25 @@ import numpy as np
 import scipy.linalg
 import scipy.optimize
 import scipy.sparse as sp
+from threadpoolctl import threadpool_limits
 
 from interlock.blocks.assembly import Assembly
+from interlock.blocks.orbits import cell_patch
 from interlock.errors import InterlockError
+from interlock.verify.check import check
 from interlock.verify.contacts import contacts
 
 __all__ = ["EdgeQuadruple", "Symbol", "PeriodicVerdict", "edge_quadruples", "symbol", "periodic_check",
-           "EXTENT_SLACK", "KERNEL_RTOL", "STRESS_TOL"]
+           "KERNEL_RTOL", "STRESS_TOL", "POSITIVE_Z", "PATCH_RADII"]
 
-#: Slack (in lattice steps) on the cell's extent when choosing which translates can touch it.
-EXTENT_SLACK = 1e-9
 #: Singular values of A(z) below this (relative) span its kernel at a torus point.
 KERNEL_RTOL = 1e-9
 #: Stress weights above this count as positive (rows that are forced closed).
 STRESS_TOL = 1e-7
+#: The positive points z at which periodic stresses are sought (fact 2 with weights w z^tau), in this order.
+POSITIVE_Z = ((1.0, 1.0), (2.0, 1.0), (1.0, 2.0), (0.5, 1.0), (1.0, 0.5), (2.0, 0.5))
+#: Radii (in cells) of the patches with a fixed ring tried when the reduction does not decide.
+PATCH_RADII = (1, 2)
 _ROUNDS = 64
 
 
@@ -55,6 +60,7 @@ class Symbol:
     rows: int
     columns: int
     translational: bool
+    length_scale: float = 1.0
 
     def __call__(self, z) -> np.ndarray:
         """``A(z)`` as a dense complex matrix, ``z`` a pair of non-zero complex numbers."""
@@ -64,10 +70,28 @@ class Symbol:
             out += term.toarray() * (z1**d1 * z2**d2)
         return out
 
+    def twists(self, x) -> np.ndarray:
+        """A real column vector as one world-unit twist ``(omega, t)`` per block of the cell, shape (k, 6)."""
+        size = 3 if self.translational else 6
+        x = np.asarray(x, dtype=float).reshape(-1, size)
+        if self.translational:
+            return np.hstack([np.zeros_like(x), x])
+        return np.hstack([x[:, :3] / self.length_scale, x[:, 3:]])
+
 
 @dataclass(frozen=True)
 class PeriodicVerdict:
-    """The answer of :func:`periodic_check`; ``status`` is "interlocked", "not interlocked" or "inconclusive"."""
+    """The answer of :func:`periodic_check`; ``status`` is "interlocked", "not interlocked" or "inconclusive".
+
+    ``motion`` (when found) has one twist ``(omega, t)`` per entry of
+    ``motion_blocks``, the ``(a, b, i)`` of a block: block ``i`` of the cell
+    moved by ``a v1 + b v2``; every block not listed stays put, so the motion
+    has finite support.  ``moving`` indexes the rows of ``motion`` that move.
+    ``lp_values`` lists, for every periodic-stress LP solved, the round, the
+    positive ``z`` and the LP's value (``sum min(w, 1)``: how many rows it
+    forced closed).  ``patch_radius`` is set when the motion (or the failure
+    to find one) comes from :func:`~interlock.blocks.cell_patch`.
+    """
 
     status: str
     reason: str
@@ -76,8 +100,11 @@ class PeriodicVerdict:
     rounds: int
     forced_rows: int
     rows: int
-    motion: np.ndarray | None = None  # per cell block (omega, t): a single-cell motion keeping every contact
+    motion: np.ndarray | None = None
+    motion_blocks: tuple[tuple[int, int, int], ...] = ()
     moving: tuple[int, ...] = ()
+    lp_values: tuple[tuple[int, float, float, float], ...] = ()
+    patch_radius: int | None = None
     tolerances: dict = field(default_factory=dict)
     timings: dict = field(default_factory=dict)
 
@@ -88,8 +115,10 @@ class PeriodicVerdict:
     def to_dict(self) -> dict:
         return {"status": self.status, "reason": self.reason, "generic_rank": self.generic_rank,
                 "columns": self.columns, "rounds": self.rounds, "forced_rows": self.forced_rows, "rows": self.rows,
-                "motion": None if self.motion is None else self.motion.tolist(), "moving": list(self.moving),
-                "tolerances": dict(self.tolerances), "timings": dict(self.timings)}
+                "motion": None if self.motion is None else self.motion.tolist(),
+                "motion_blocks": [list(b) for b in self.motion_blocks], "moving": list(self.moving),
+                "lp_values": [{"round": r, "z": [z1, z2], "value": v} for r, z1, z2, v in self.lp_values],
+                "patch_radius": self.patch_radius, "tolerances": dict(self.tolerances), "timings": dict(self.timings)}
 
 
 def edge_quadruples(cell: Assembly) -> tuple[EdgeQuadruple, ...]:
@@ -98,28 +127,22 @@ def edge_quadruples(cell: Assembly) -> tuple[EdgeQuadruple, ...]:
     A contact between block ``i`` of cell ``tau`` and block ``j`` of cell
     ``tau + delta`` is listed for ``tau = 0`` with ``delta > 0``
     lexicographically, or ``delta = 0`` and ``i < j``.
+
+    >>> from interlock.blocks import presets
+    >>> sorted(q.offset for q in edge_quadruples(presets.cube_grid_cell()))
+    [(0, 1), (1, 0)]
     """
-    lattice = _lattice(cell)
+    _check_cell(cell)
+    around = cell_patch(cell, 0)  # the cell first, then every translate that can touch it
     k = len(cell)
-    reach = _reach(cell, lattice)
-    offsets = [(a, b) for a in range(-reach, reach + 1) for b in range(-reach, reach + 1)]
-    transforms, types = [], []
-    for a, b in offsets:
-        shift = np.eye(4)
-        shift[:3, 3] = a * lattice[0] + b * lattice[1]
-        transforms += [shift @ t for t in cell.transforms]
-        types += list(cell.types)
-    extended = Assembly(cell.meshes, types, transforms)
-    centre = offsets.index((0, 0))
     found = []
-    for c in contacts(extended):
+    for c in contacts(around, involving=range(k)):
         for first, second, sign in ((c.i, c.j, 1.0), (c.j, c.i, -1.0)):
-            if first // k != centre:
+            if first >= k:
                 continue
-            delta = offsets[second // k]
-            i, j = first % k, second % k
-            if delta > (0, 0) or (delta == (0, 0) and i < j):
-                found.append(EdgeQuadruple(i, j, delta, sign * np.asarray(c.normal), np.asarray(c.vertices)))
+            a, b, j = around.labels[second]
+            if (a, b) > (0, 0) or ((a, b) == (0, 0) and first < j):
+                found.append(EdgeQuadruple(first, j, (a, b), sign * np.asarray(c.normal), np.asarray(c.vertices)))
     return tuple(found)
 
 
@@ -130,9 +153,15 @@ def symbol(cell: Assembly, translational: bool = False, quadruples=None) -> Symb
     block ``i`` (cell 0) to block ``j`` (cell ``delta``), ``-(r_i x n, n)`` in
     the columns of ``i`` and ``z^delta (r_j x n, n)`` in those of ``j``, with
     ``r`` measured from each block's centroid in its own cell, over the cell size.
+
+    >>> from interlock.blocks import presets
+    >>> A = symbol(presets.cube_grid_cell())
+    >>> A.rows, A.columns, float(abs(A((1j, -1)) @ [0, 0, 0, 0, 0, 1]).max())
+    (8, 6, 0.0)
     """
+    _check_cell(cell)
     quadruples = edge_quadruples(cell) if quadruples is None else quadruples
-    lattice = _lattice(cell)
+    lattice = cell.lattice
     size = 3 if translational else 6
     length = float(np.linalg.norm(lattice, axis=1).max())
     centroids = cell.centroids
@@ -153,23 +182,28 @@ def symbol(cell: Assembly, translational: bool = False, quadruples=None) -> Symb
         mask = np.all(offsets == delta, axis=1)
         term = _rows_matrix(rows[mask], j[mask], other[mask], size, len(p), columns)
         terms[delta] = terms[delta] + term if delta in terms else term
-    return Symbol(terms, len(p), columns, translational)
+    return Symbol(terms, len(p), columns, translational, length)
 
 
-def periodic_check(cell: Assembly, translational: bool = False, seed: int = 0) -> PeriodicVerdict:
+def periodic_check(cell: Assembly, translational: bool = False, seed: int = 0,
+                   patch_radii: tuple[int, ...] = PATCH_RADII) -> PeriodicVerdict:
     """Decide interlocking of the infinite assembly generated by a periodic cell (Def. 2.7, finite-support motions).
 
     The periodic facial reduction of DESIGN.md: with ``P`` the admissible cell
-    motions (all of ``R^{6k}`` at first), a maximal-support stress
-    ``w >= 0`` of ``A(1) P`` forces its rows closed (fact 2); the kernel of
-    the forced rows of ``A(z) P`` at random torus points then decides (fact
-    1): zero means **interlocked**; non-zero with every row forced means
-    **not interlocked**; a kernel that is the same real subspace at two
-    points (fact 3) restricts ``P`` and the rounds repeat; anything else is
-    **inconclusive**.  A constant kernel vector ``u`` is itself a motion of
-    finite support: one cell moving by ``u`` keeps every contact.
+    motions (all of ``R^{6k}`` at first), a maximal-support stress ``w >= 0``
+    of ``A(z) P`` at a positive ``z`` (first ``z = (1, 1)``, then the others of
+    :data:`POSITIVE_Z` while undecided) forces its rows closed (fact 2); the
+    kernel of the forced rows of ``A(z) P`` at random torus points then decides
+    (fact 1): zero means **interlocked**; non-zero with every row forced means
+    **not interlocked**; a kernel that is the same real subspace at two points
+    (fact 3) restricts ``P`` and the rounds repeat; a constant kernel that keeps
+    every row is a motion of one cell alone.  Anything else is **inconclusive**
+    after the reduction, and then patches of the radii ``patch_radii`` with a
+    fixed ring (:func:`~interlock.blocks.cell_patch`) are checked: a motion
+    found there is a finite-support motion, i.e. a proof of **not interlocked**.
+    The same patches supply an explicit motion when fact 1 proves one exists.
 
-    The cost depends on the cell (``6k`` columns), not on any patch size.
+    The reduction costs depend on the cell (``6k`` columns), not on any patch.
 
     Examples
     --------
@@ -177,67 +211,115 @@ def periodic_check(cell: Assembly, translational: bool = False, seed: int = 0) -
     >>> print(periodic_check(presets.interlocking_cubes_cell()).status)
     interlocked
     """
+    _check_cell(cell)
     timings = {}
     start = time.perf_counter()
     A = symbol(cell, translational)
     timings["symbol"] = time.perf_counter() - start
     start = time.perf_counter()
     rng = np.random.default_rng(seed)
-    points = [np.exp(2j * np.pi * rng.random(2)) for _ in range(2)]
-    at_points = [A(z) for z in points]
-    at_one = A((1.0, 1.0)).real
-    n = A.columns
-    generic_rank = n - _kernel(at_points[0]).shape[1]
-    basis = np.eye(n)  # the admissible cell motions P, as orthonormal columns
+    with threadpool_limits(1, "blas"):  # matrices of a few hundred rows: threads cost more than they give
+        at_points = [A(z) for z in (np.exp(2j * np.pi * rng.random(2)) for _ in range(2))]
+        generic_rank = A.columns - _kernel(at_points[0]).shape[1]
+        reduction = _reduce(A, at_points)
+    timings["reduction"] = time.perf_counter() - start
+    status, reason, motion, blocks = reduction.status, reduction.reason, None, ()
+    if reduction.motion is not None:
+        motion, blocks = A.twists(reduction.motion), tuple((0, 0, i) for i in range(len(cell)))
+    radius = None
+    if status == "inconclusive" or (status == "not interlocked" and motion is None):
+        start = time.perf_counter()
+        radius, motion, blocks = _patch_motion(cell, translational, patch_radii)
+        timings["patches"] = time.perf_counter() - start
+        tried = ", ".join(map(str, patch_radii)) or "none"
+        if motion is not None:
+            status = "not interlocked"
+            reason += f"; a patch of radius {radius} with its ring fixed moves (finite support)"
+        else:
+            reason += f"; patches of radius {tried} with their ring fixed found no motion"
+    twists, moving = _normalised(motion)
+    tolerances = {"kernel_rtol": KERNEL_RTOL, "stress_tol": STRESS_TOL, "seed": seed,
+                  "positive_z": [list(z) for z in POSITIVE_Z], "patch_radii": list(patch_radii)}
+    return PeriodicVerdict(status, reason, generic_rank, A.columns, reduction.rounds, reduction.forced, A.rows,
+                           twists, blocks, moving, reduction.lp_values, radius, tolerances, timings)
+
+
+@dataclass(frozen=True)
+class _Reduction:
+    status: str
+    reason: str
+    rounds: int
+    forced: int
+    lp_values: tuple
+    motion: np.ndarray | None = None
+
+
+def _reduce(A: Symbol, at_points) -> _Reduction:
+    """The periodic facial reduction of :func:`periodic_check`, without the patch fallback."""
+    basis = np.eye(A.columns)  # the admissible cell motions P, as orthonormal columns
     forced = np.zeros(A.rows, dtype=bool)
-    tolerances = {"kernel_rtol": KERNEL_RTOL, "stress_tol": STRESS_TOL, "seed": seed}
-    verdict, motion = None, None
-    for rounds in range(1, _ROUNDS + 1):
-        new = _forced_rows(at_one @ basis, STRESS_TOL)
+    lp_values, rounds, z_index, fresh = [], 1, 0, True
+    while rounds <= _ROUNDS:
+        z = POSITIVE_Z[z_index]
+        new, value = _forced_rows(A(z).real @ basis, STRESS_TOL)
+        lp_values.append((rounds, float(z[0]), float(z[1]), value))
         grew = bool((new & ~forced).any())
         forced |= new
-        kernels = [_kernel(M[forced] @ basis) for M in at_points]
-        if kernels[0].shape[1] == 0:
-            verdict = ("interlocked", "the forced rows admit no motion of finite support")
+        if grew or fresh:
+            fresh = False
+            kernels = [_kernel(at_points[0][forced] @ basis)]
+            if kernels[0].shape[1]:
+                kernels.append(_kernel(at_points[1][forced] @ basis))
+            found = lambda status, reason, motion=None: _Reduction(status, reason, rounds, int(forced.sum()),
+                                                                   tuple(lp_values), motion)
+            if kernels[0].shape[1] == 0:
+                return found("interlocked", "the forced rows admit no motion of finite support")
+            constant = _real_basis(kernels[0]) if _same_real_subspace(*kernels) else None
+            if constant is not None and _keeps_all(at_points, basis @ constant):
+                return found("not interlocked", "one cell can move and keep every contact: a sliding motion of "
+                             "finite support", basis @ constant[:, 0])
+            if forced.all():
+                return found("not interlocked", "every row is forced and A(z) keeps a kernel: a sliding motion of "
+                             "finite support exists (fact 1)")
+            if constant is not None and constant.shape[1] < basis.shape[1]:
+                basis = basis @ constant  # fact 3: every finite-support motion stays in this subspace
+                rounds, z_index, fresh = rounds + 1, 0, True
+                continue
+        z_index += 1
+        if z_index == len(POSITIVE_Z):
             break
-        constant = _real_basis(kernels[0]) if _same_real_subspace(*kernels) else None
-        if constant is not None and _keeps_all(at_points, basis @ constant):
-            motion = basis @ constant[:, 0]
-            verdict = ("not interlocked", "one cell can move and keep every contact: a sliding motion of finite support")
-            break
-        if forced.all():
-            verdict = ("not interlocked", "every row is forced and A(z) keeps a kernel: a sliding motion of finite "
-                       "support exists (fact 1)")
-            break
-        if constant is not None and constant.shape[1] < basis.shape[1]:
-            basis = basis @ constant  # fact 3: every finite-support motion stays in this subspace
-            continue
-        if not grew or constant is None:
-            verdict = ("inconclusive", "the kernel of the forced rows is not constant, or a round forced nothing new; "
-                       "check a finite patch with its outside fixed")
-            break
-    timings["reduction"] = time.perf_counter() - start
-    status, reason = verdict or ("inconclusive", "no decision within the round limit")
-    twists, moving = None, ()
-    if motion is not None:
-        size = 3 if translational else 6
-        per_block = motion.reshape(len(cell), size)
-        twists = np.hstack([np.zeros_like(per_block), per_block]) if translational else per_block
-        largest = twists.ravel()[np.argmax(np.abs(twists))]
-        twists = twists / largest  # a kernel motion has no sign: the largest component becomes +1
-        moving = tuple(int(b) for b in np.flatnonzero(np.abs(twists).max(axis=1) > 1e-6))
-    return PeriodicVerdict(status, reason, generic_rank, n, rounds, int(forced.sum()), A.rows, twists, moving,
-                           tolerances, timings)
+    return _Reduction("inconclusive", "the kernel of the forced rows is not constant and no positive z forces "
+                      "more rows", rounds, int(forced.sum()), tuple(lp_values))
+
+
+def _patch_motion(cell: Assembly, translational: bool, radii):
+    """The first motion of a patch of growing radius with its ring fixed: (radius, twists, (a, b, i) labels)."""
+    for radius in radii:
+        assembly = cell_patch(cell, int(radius))
+        verdict = check(assembly, translational=translational, validate=False)
+        if verdict.interlocked is False and verdict.motion is not None:
+            free = [b for b in range(len(assembly)) if b not in set(assembly.frame)]
+            return int(radius), verdict.motion[free], tuple(assembly.labels[b] for b in free)
+    return None, None, ()
+
+
+def _normalised(twists):
+    """Twists ``(omega, t)`` per block with the largest component +1 (a motion's scale is arbitrary), and who moves."""
+    if twists is None:
+        return None, ()
+    largest = twists.ravel()[np.argmax(np.abs(twists))]
+    twists = twists / largest
+    moving = tuple(int(b) for b in np.flatnonzero(np.abs(twists).max(axis=1) > 1e-6))
+    return twists, moving
 
 
 # --- helpers --------------------------------------------------------------------------------
 
 
-def _lattice(cell: Assembly) -> np.ndarray:
+def _check_cell(cell) -> None:
     if not isinstance(cell, Assembly) or cell.lattice is None:
         raise InterlockError("a periodic check needs a periodic cell: an Assembly with two lattice vectors "
                              "(e.g. interlock.blocks.periodic_cell(block) or Assembly(..., lattice=[v1, v2]))")
-    return cell.lattice
 
 
 def _entries(r, n, length, translational) -> np.ndarray:
@@ -253,22 +335,11 @@ def _rows_matrix(rows, blocks, entries, size, count, columns) -> sp.csr_matrix:
     return sp.csr_matrix((entries.ravel(), (r, c)), shape=(count, columns))
 
 
-def _reach(cell: Assembly, lattice: np.ndarray) -> int:
-    """The largest ``|delta|`` (lattice steps) for which a block of cell ``delta`` can touch one of cell 0.
-
-    A common point ``x`` of block ``i`` and of block ``j`` moved by ``delta``
-    puts ``delta`` within the cell's extent in lattice coordinates.
-    """
-    coordinates = cell.bounds.reshape(-1, 3) @ np.linalg.pinv(lattice)
-    extent = float((coordinates.max(axis=0) - coordinates.min(axis=0)).max())
-    return int(np.floor(extent + EXTENT_SLACK))
-
-
 def _forced_rows(M: np.ndarray, tol: float) -> np.ndarray:
-    """Rows in the support of a maximal-support ``w >= 0`` with ``M^T w = 0`` (max sum min(w, 1))."""
+    """Rows in the support of a maximal-support ``w >= 0`` with ``M^T w = 0``, and the LP value ``max sum min(w, 1)``."""
     m, n = M.shape
     if m == 0:
-        return np.zeros(0, dtype=bool)
+        return np.zeros(0, dtype=bool), 0.0
     # variables (w, y): maximise sum y subject to M^T w = 0, y <= w, 0 <= y <= 1, w >= 0
     cost = np.concatenate([np.zeros(m), -np.ones(m)])
     A_eq = np.hstack([M.T, np.zeros((n, m))])
@@ -276,15 +347,16 @@ def _forced_rows(M: np.ndarray, tol: float) -> np.ndarray:
     result = scipy.optimize.linprog(cost, A_ub=A_ub, b_ub=np.zeros(m), A_eq=A_eq, b_eq=np.zeros(n),
                                     bounds=[(0, None)] * m + [(0, 1)] * m, method="highs")
     if result.status != 0:
-        return np.zeros(m, dtype=bool)
-    return result.x[m:] > 0.5
+        return np.zeros(m, dtype=bool), 0.0
+    return result.x[m:] > 0.5, float(-result.fun)
 
 
 def _kernel(M: np.ndarray) -> np.ndarray:
-    n = M.shape[1]
-    if M.shape[0] == 0:
+    """An orthonormal basis (columns) of the kernel of ``M``: right singular vectors below ``KERNEL_RTOL``."""
+    m, n = M.shape
+    if m == 0:
         return np.eye(n, dtype=complex)
-    _, sigma, vh = scipy.linalg.svd(M, full_matrices=True)
+    _, sigma, vh = scipy.linalg.svd(M, full_matrices=m < n, check_finite=False)  # vh is n x n either way
     top = sigma.max(initial=0.0) or 1.0
     rank = int((sigma > KERNEL_RTOL * top).sum())
     return vh[rank:].conj().T

@@ -4,8 +4,10 @@ import numpy as np
 import pytest
 
 from interlock import InterlockError, wallpaper
-from interlock.blocks import Assembly, escher_block, patch, periodic_cell, presets, rhomblock_assembly, staircase
-from interlock.verify import check, criterion_4_3, edge_quadruples, periodic_check, symbol
+from interlock.blocks import (Assembly, cell_patch, escher_block, patch, periodic_cell, presets, rhomblock_assembly,
+                              staircase)
+from interlock.verify import check, criterion_4_3, edge_quadruples, interlocking_matrix, periodic_check, symbol
+from interlock.verify import periodic
 from tests.blocks.deformations import random_block
 
 
@@ -33,7 +35,7 @@ def test_one_orientation_rhomblocks_need_two_rounds():
     assert periodic_check(rhomblock_assembly(staircase((1, 0, 0)), 0)).rounds == 2
 
 
-@pytest.mark.parametrize("seed", range(12))
+@pytest.mark.parametrize("seed", range(40))
 def test_theorem_4_7_translational_verdict_equals_criterion_4_3_in_p1(seed):
     rng = np.random.default_rng(seed)
     group = wallpaper.group("p1", b=float(rng.uniform(0.7, 1.3)), gamma=float(rng.uniform(60, 120)))
@@ -44,7 +46,7 @@ def test_theorem_4_7_translational_verdict_equals_criterion_4_3_in_p1(seed):
 
 
 @pytest.mark.parametrize("name", ["p2", "p3", "p4", "p6"])
-@pytest.mark.parametrize("seed", range(4))
+@pytest.mark.parametrize("seed", range(10))
 def test_proposition_4_6_full_generic_rank_exactly_when_criterion_holds(name, seed):
     block = random_block(wallpaper.group(name), np.random.default_rng(100 + seed), max_points=2, skip=0.4)
     v = periodic_check(periodic_cell(block))
@@ -61,6 +63,90 @@ def test_patches_never_contradict_the_periodic_verdict(deformation):
     for radius in (1.0, 1.5, 2.0):
         finite = check(patch(block, radius, frame="boundary")).interlocked
         assert not (periodic == "interlocked" and finite is False)
+
+
+def _cells():
+    """Cells of every kind the verifier accepts, with a seeded random Escher block per rotation group."""
+    cells = {"cube grid": presets.cube_grid_cell(), "tilted cubes": presets.interlocking_cubes_cell(),
+             "rhomblock (1,0,0)": rhomblock_assembly(staircase((1, 0, 0)), 0),
+             "rhomblock (1,1,0) v1": rhomblock_assembly(staircase((1, 1, 0)), 1)}
+    for name, seed in [("p1", 0), ("p1", 3), ("p2", 1), ("p2", 5), ("p3", 2), ("p4", 0), ("p4", 4), ("p6", 1)]:
+        cells[f"{name} seed {seed}"] = periodic_cell(random_block(wallpaper.group(name), np.random.default_rng(seed),
+                                                                  max_points=2, skip=0.4))
+    return cells
+
+
+CELLS = _cells()
+
+
+def _world_vector(matrix, twists_by_block):
+    """The column vector of ``interlocking_matrix`` for world twists given per block (zero elsewhere)."""
+    x = np.zeros((len(matrix.free), 6))
+    for k, b in enumerate(matrix.free):
+        omega, t = twists_by_block.get(int(b), np.zeros(6)).reshape(2, 3)
+        x[k] = np.concatenate([omega, t / matrix.length_scale])
+    return x.ravel()
+
+
+@pytest.mark.parametrize("name", sorted(CELLS))
+def test_patches_with_a_fixed_ring_never_contradict_the_periodic_verdict(name):
+    cell = CELLS[name]
+    v = periodic_check(cell)
+    assert v.status != "inconclusive"
+    for radius in (0, 1):
+        finite = check(cell_patch(cell, radius), validate=False)
+        # a motion of a patch with its ring fixed is a finite-support motion of the infinite assembly
+        assert not (v.status == "interlocked" and finite.interlocked is False), radius
+    if v.status == "not interlocked" and v.patch_radius is None:
+        assert check(cell_patch(cell, 0), validate=False).interlocked is False  # one cell moving is found at once
+
+
+def _assert_motion_keeps_every_contact(cell, v, sliding):
+    """Apply the verdict's motion to a patch holding the moving blocks and all they touch: A x >= 0 (= 0 if sliding)."""
+    assert v.moving and len(v.motion) == len(v.motion_blocks)
+    reach = max(max(abs(a), abs(b)) for a, b, _ in v.motion_blocks)
+    around = cell_patch(cell, reach)
+    where = {label: index for index, label in enumerate(around.labels)}
+    M = interlocking_matrix(around, frame=())
+    Ax = M.matrix @ _world_vector(M, {where[v.motion_blocks[k]]: v.motion[k] for k in v.moving})
+    assert Ax.min() > -1e-7
+    if sliding:
+        assert np.abs(Ax).max() < 1e-7
+
+
+@pytest.mark.parametrize("name", [n for n in sorted(CELLS) if periodic_check(CELLS[n]).status == "not interlocked"])
+def test_the_reported_motion_keeps_every_contact_of_the_infinite_assembly(name):
+    _assert_motion_keeps_every_contact(CELLS[name], periodic_check(CELLS[name]), sliding=True)
+
+
+def test_lp_values_report_each_positive_z_tried():
+    v = periodic_check(rhomblock_assembly(staircase((1, 0, 0)), 0))
+    assert v.lp_values[0][:3] == (1, 1.0, 1.0)
+    assert {r for r, *_ in v.lp_values} == {1, 2}
+    # round 1 forces the vertical walls only (DESIGN.md), round 2 the tilted rows as well
+    assert 0 < v.lp_values[0][3] < v.rows and v.lp_values[-1][3] == pytest.approx(v.rows, abs=1e-6)
+    assert all(z1 > 0 and z2 > 0 for _, z1, z2, _ in v.lp_values)
+    assert v.to_dict()["lp_values"][0] == {"round": 1, "z": [1.0, 1.0], "value": v.lp_values[0][3]}
+
+
+def _undecided(A, at_points):
+    return periodic._Reduction("inconclusive", "forced undecided for the test", 1, 0, ())
+
+
+def test_an_undecided_reduction_falls_back_to_patches_that_find_a_motion(monkeypatch):
+    monkeypatch.setattr(periodic, "_reduce", _undecided)
+    v = periodic_check(presets.cube_grid_cell())
+    assert v.status == "not interlocked" and v.patch_radius == 1 and "patch of radius 1" in v.reason
+    assert all(max(abs(a), abs(b)) <= 1 for a, b, _ in v.motion_blocks)  # finite support, ring fixed
+    assert "patches" in v.timings
+    _assert_motion_keeps_every_contact(presets.cube_grid_cell(), v, sliding=False)
+
+
+def test_an_undecided_reduction_stays_inconclusive_when_no_patch_moves(monkeypatch):
+    monkeypatch.setattr(periodic, "_reduce", _undecided)
+    v = periodic_check(presets.interlocking_cubes_cell(), patch_radii=(0, 1))
+    assert v.status == "inconclusive" and v.motion is None and "radius 0, 1" in v.reason
+    assert v.tolerances["patch_radii"] == [0, 1]
 
 
 def test_symbol_and_quadruples():
