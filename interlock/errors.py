@@ -1,6 +1,6 @@
 """The exception hierarchy: every error raised on bad input is an ``InterlockError``."""
 
-__all__ = ["InterlockError", "GroupError", "LatticeError"]
+__all__ = ["InterlockError", "GroupError", "LatticeError", "GalleryError"]
 
 
 class InterlockError(ValueError):
@@ -17,3 +17,7 @@ class GroupError(InterlockError):
 
 class LatticeError(InterlockError):
     """Lattice parameters that are not allowed for the group's crystal system."""
+
+
+class GalleryError(InterlockError):
+    """Something that cannot be exported, drawn or written: an unknown format, a bad path, a wrong object."""

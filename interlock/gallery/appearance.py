@@ -1,0 +1,101 @@
+"""How blocks look: which belong together, their colours, and exploded positions."""
+
+from __future__ import annotations
+
+import numpy as np
+import trimesh
+
+from interlock.blocks.assembly import Assembly
+from interlock.blocks.escher import Block
+from interlock.blocks.lozenge import Lozenge
+from interlock.errors import GalleryError
+from interlock.wallpaper.elements import GroupElement
+
+__all__ = ["as_assembly", "block_classes", "block_colours", "exploded", "PALETTE"]
+
+#: RGBA colours (uint8) for block classes 0, 1, 2, ... (cycled): colour-blind-safe (Okabe-Ito), opaque.
+PALETTE = np.array([[0, 114, 178, 255], [230, 159, 0, 255], [0, 158, 115, 255], [204, 121, 167, 255],
+                    [86, 180, 233, 255], [213, 94, 0, 255], [240, 228, 66, 255], [120, 120, 120, 255]],
+                   dtype=np.uint8)
+_IDENTITY = ((1, 0), (0, 1))
+
+
+def as_assembly(obj) -> Assembly:
+    """A block, a mesh or an assembly as an :class:`~interlock.blocks.Assembly`.
+
+    >>> from interlock.blocks import presets
+    >>> len(as_assembly(presets.cube_grid().mesh(0)))
+    1
+    """
+    if isinstance(obj, Assembly):
+        return obj
+    if isinstance(obj, Block):
+        return Assembly.from_meshes([obj.mesh], info={"group": obj.group.name})
+    if isinstance(obj, trimesh.Trimesh):
+        return Assembly.from_meshes([obj])
+    raise GalleryError(f"expected a Block, an Assembly or a trimesh.Trimesh, got {type(obj).__name__}")
+
+
+def block_classes(assembly: Assembly) -> tuple[np.ndarray, str]:
+    """One small integer per block, and what it means.
+
+    - RhomBlocks (labels are lozenges): the lozenge's orientation 0, 1, 2 ("orientation").
+    - Escher blocks (labels are group elements ``g``): the coset ``gT`` of the
+      translation subgroup, i.e. the linear part of ``g``; the identity's is 0,
+      the others follow in sorted order ("coset").
+    - Patches of a periodic cell (labels ``(a, b, i)``): the block ``i`` of the cell ("cell block").
+    - Anything else: the block's mesh type ("type").
+
+    >>> from interlock.blocks import presets
+    >>> classes, kind = block_classes(presets.cube_grid())
+    >>> kind, sorted(set(classes.tolist()))
+    ('type', [0])
+    """
+    labels = assembly.labels
+    if labels and all(isinstance(label, Lozenge) for label in labels):
+        return np.array([label.orientation for label in labels], dtype=int), "orientation"
+    if labels and all(isinstance(label, GroupElement) for label in labels):
+        linear = [label.linear for label in labels]
+        order = {part: k for k, part in enumerate(sorted(set(linear), key=lambda p: (p != _IDENTITY, p)))}
+        return np.array([order[part] for part in linear], dtype=int), "coset"
+    if labels and all(_is_cell_label(label) for label in labels):
+        return np.array([label[2] for label in labels], dtype=int), "cell block"
+    return np.asarray(assembly.types, dtype=int).copy(), "type"
+
+
+def block_colours(assembly: Assembly) -> np.ndarray:
+    """RGBA (uint8) per block from :data:`PALETTE` by :func:`block_classes`, shape (n, 4).
+
+    >>> from interlock.blocks import presets
+    >>> block_colours(presets.cube_grid()).shape
+    (9, 4)
+    """
+    classes, _ = block_classes(assembly)
+    return PALETTE[classes % len(PALETTE)]
+
+
+def exploded(assembly: Assembly, factor: float) -> Assembly:
+    """Every block moved away from the assembly's centre: ``c_i -> c_i + factor (c_i - c)``.
+
+    ``c_i`` is block ``i``'s centroid and ``c`` the mean of the centroids;
+    ``factor = 0`` gives the assembly back.  Frame, labels and lattice are kept.
+
+    >>> from interlock.blocks import presets
+    >>> a = presets.cube_grid()
+    >>> float(exploded(a, 0.5).bounds.max() - a.bounds.max())
+    0.5
+    """
+    factor = float(factor)
+    if not np.isfinite(factor) or factor < 0:
+        raise GalleryError(f"exploded must be a finite factor >= 0, got {factor}")
+    if factor == 0 or len(assembly) == 0:
+        return assembly
+    centroids = assembly.centroids
+    transforms = assembly.transforms.copy()
+    transforms[:, :3, 3] += factor * (centroids - centroids.mean(axis=0))
+    return Assembly(assembly.meshes, assembly.types, transforms, assembly.labels, assembly.frame,
+                    assembly.lattice, None, {**assembly.info, "exploded": factor})
+
+
+def _is_cell_label(label) -> bool:
+    return isinstance(label, tuple) and len(label) == 3 and all(isinstance(v, (int, np.integer)) for v in label)
