@@ -12,6 +12,6 @@ disprove that they interlock (``interlock.verify``).
 __version__ = "0.1.0"
 
 from interlock import wallpaper
-from interlock.errors import GroupError, InterlockError, LatticeError
+from interlock.errors import GalleryError, GroupError, InterlockError, LatticeError
 
-__all__ = ["InterlockError", "GroupError", "LatticeError", "wallpaper", "__version__"]
+__all__ = ["InterlockError", "GroupError", "LatticeError", "GalleryError", "wallpaper", "__version__"]

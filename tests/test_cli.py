@@ -116,3 +116,56 @@ def test_periodic_bad_input_is_one_line(argv, message):
     assert run.returncode == 2 and "Traceback" not in run.stderr
     lines = run.stderr.strip().splitlines()
     assert len(lines) == 1 and message in lines[0]
+
+
+def test_gallery_quick_builds_and_summarises(tmp_path, capsys):
+    assert main(["gallery", str(tmp_path / "g"), "--quick", "--seed", "0"]) == 0
+    out = capsys.readouterr().out
+    assert "escher-p4" in out and "rhomblock-staircase-1-1-0-v1" in out and "index.html" in out
+    assert (tmp_path / "g" / "index.html").is_file()
+
+
+@pytest.mark.parametrize("argv,blocks", [
+    (["generate", "wallpaper", "p4", "--deform", "0:0.25,0.1", "--radius", "1"], 21),
+    (["generate", "rhomblock", "--hexagon", "2", "2", "2", "--seed", "3", "--variant", "1"], 12),
+    (["generate", "rhomblock", "--periodic", "one-orientation", "--radius", "1"], None),
+])
+@pytest.mark.parametrize("suffix", [".stl", ".glb"])
+def test_generate_writes_the_blocks_that_load_back(tmp_path, capsys, argv, blocks, suffix):
+    from interlock.blocks import Assembly
+
+    out = tmp_path / f"out{suffix}"
+    assert main([*argv, "-o", str(out)]) == 0
+    assert capsys.readouterr().out.startswith(f"wrote {out}")
+    loaded = Assembly.load(out)
+    if blocks is not None:
+        assert len(loaded) == blocks
+    assert all(m.is_watertight for m in loaded.world_meshes())
+
+
+def test_generate_a_picture(tmp_path):
+    out = tmp_path / "hexagon.png"
+    assert main(["generate", "rhomblock", "--hexagon", "2", "2", "2", "--exploded", "0.3", "-o", str(out)]) == 0
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+@pytest.mark.parametrize("argv,message", [
+    (["generate", "wallpaper", "p5", "-o", "x.stl"], "unknown wallpaper group 'p5'"),
+    (["generate", "wallpaper", "p4", "--deform", "0:0.5,0.0", "-o", "x.stl"], "edge 0"),
+    (["generate", "wallpaper", "p4", "-o", "x.docx"], ".docx"),
+    (["generate", "wallpaper", "p4", "-o", "/no/such/folder/x.stl"], "/no/such/folder"),
+    (["generate", "rhomblock", "--periodic", "sideways", "-o", "x.stl"], "or one of one-orientation"),
+    (["generate", "rhomblock", "--hexagon", "2", "-1", "2", "-o", "x.stl"], "hexagon side b must be an integer >= 0"),
+])
+def test_generate_bad_input_is_one_line(tmp_path, argv, message):
+    run = subprocess.run([sys.executable, "-m", "interlock", *argv], capture_output=True, text=True, cwd=tmp_path)
+    assert run.returncode == 2 and "Traceback" not in run.stderr, run.stderr
+    lines = run.stderr.strip().splitlines()
+    assert len(lines) == 1 and message in lines[0], lines
+
+
+@pytest.mark.parametrize("command", [["gallery"], ["generate", "wallpaper"], ["generate", "rhomblock"]])
+def test_help_shows_an_example(command, capsys):
+    with pytest.raises(SystemExit):
+        main([*command, "--help"])
+    assert "example" in capsys.readouterr().out

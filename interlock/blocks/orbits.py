@@ -117,7 +117,8 @@ def cell_patch(cell: Assembly, radius: int) -> Assembly:
     finite assembly is a finite-support motion of the infinite one (DESIGN.md,
     "Periodic reduction": the fallback of an inconclusive periodic verdict).
 
-    Labels are ``(a, b, i)``: lattice offset and block of the cell.
+    Labels are ``(a, b, i)``: lattice offset and block of the cell; ``info["cell_labels"]``
+    keeps the cell's own labels (lozenges, group elements).
 
     >>> from interlock.blocks import presets
     >>> p = cell_patch(presets.cube_grid_cell(), 1)
@@ -139,8 +140,9 @@ def cell_patch(cell: Assembly, radius: int) -> Assembly:
         labels += [(a, b, i) for i in range(k)]
         if max(abs(a), abs(b)) > radius:
             frame += range(len(labels) - k, len(labels))
+    info = {**cell.info, "cell_radius": int(radius), "ring": outer - int(radius), "cell_labels": list(cell.labels)}
     return Assembly(cell.meshes, np.tile(cell.types, len(offsets)), np.array(transforms), labels=labels,
-                    frame=frame, info={**cell.info, "cell_radius": int(radius), "ring": outer - int(radius)})
+                    frame=frame, info=info)
 
 
 def _lattice(cell: Assembly) -> np.ndarray:

@@ -43,7 +43,8 @@ def block_classes(assembly: Assembly) -> tuple[np.ndarray, str]:
     - Escher blocks (labels are group elements ``g``): the coset ``gT`` of the
       translation subgroup, i.e. the linear part of ``g``; the identity's is 0,
       the others follow in sorted order ("coset").
-    - Patches of a periodic cell (labels ``(a, b, i)``): the block ``i`` of the cell ("cell block").
+    - Patches of a periodic cell (labels ``(a, b, i)``, :func:`~interlock.blocks.cell_patch`): the
+      class of the cell's block ``i`` by the rules above, else ``i`` itself ("cell block").
     - Anything else: the block's mesh type ("type").
 
     >>> from interlock.blocks import presets
@@ -59,7 +60,15 @@ def block_classes(assembly: Assembly) -> tuple[np.ndarray, str]:
         order = {part: k for k, part in enumerate(sorted(set(linear), key=lambda p: (p != _IDENTITY, p)))}
         return np.array([order[part] for part in linear], dtype=int), "coset"
     if labels and all(_is_cell_label(label) for label in labels):
-        return np.array([label[2] for label in labels], dtype=int), "cell block"
+        within = np.array([label[2] for label in labels], dtype=int)
+        cell_labels = assembly.info.get("cell_labels")
+        if cell_labels is not None and len(cell_labels) > within.max():
+            cell = Assembly(assembly.meshes, np.zeros(len(cell_labels), dtype=int),
+                            np.tile(np.eye(4), (len(cell_labels), 1, 1)), labels=cell_labels)
+            classes, kind = block_classes(cell)
+            if kind != "type":
+                return classes[within], kind
+        return within, "cell block"
     return np.asarray(assembly.types, dtype=int).copy(), "type"
 
 

@@ -1,0 +1,465 @@
+"""The gallery: generated, verified and exported assemblies with pictures and an offline index page."""
+
+from __future__ import annotations
+
+import html
+import json
+import math
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from interlock import wallpaper
+from interlock.blocks import (Assembly, cell_patch, escher_block, patch, periodic_cell, presets, random_hexagon,
+                              rhomblock, rhomblock_assembly, staircase)
+from interlock.blocks.escher import Block, DeformationError
+from interlock.errors import GalleryError
+from interlock.gallery.export import export
+from interlock.gallery.render import render
+from interlock.verify import check, criterion_4_3, periodic_check
+
+__all__ = ["Claim", "Entry", "EntryResult", "Gallery", "entries", "build", "ESCHER_GROUPS", "REFLECTION_GROUPS"]
+
+#: Escher blocks with rotations only (main paper Sec. 3.2, Fig. 1 and Fig. 5).
+ESCHER_GROUPS = ("p1", "p2", "p3", "p4", "p6")
+#: Escher blocks of groups with reflections or glides; mirror edges stay straight.
+REFLECTION_GROUPS = ("pm", "pg", "cm", "pmg", "pgg")
+
+
+@dataclass(frozen=True)
+class Claim:
+    """What the paper proves about an entry, and how to read it off the entry's record.
+
+    ``test(record)`` is True when the record agrees, False when it contradicts
+    the statement, and None when the record cannot say (e.g. an inconclusive verdict).
+    """
+
+    source: str
+    statement: str
+    test: Callable[[dict], bool | None]
+
+
+@dataclass(frozen=True)
+class Entry:
+    """One gallery entry, not yet built: how to make its objects and what the paper says about them.
+
+    ``make()`` returns a dict with ``block`` (a Block or a mesh: the single
+    block), ``assembly`` (finite, with its frame), optionally ``cell`` (a
+    periodic cell) and ``tiling`` (a Block or a LozengeTiling for the 2D picture),
+    and ``parameters`` (JSON-ready).
+    """
+
+    name: str
+    title: str
+    kind: str
+    make: Callable[[], dict]
+    claims: tuple[Claim, ...] = ()
+    translational: bool = False
+
+
+@dataclass(frozen=True)
+class EntryResult:
+    """A built entry: its JSON record, the files written (relative to the gallery folder) and any contradictions."""
+
+    name: str
+    record: dict
+    files: dict
+    contradictions: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class Gallery:
+    """The built gallery: its folder, entries, the index page and every contradiction with the paper."""
+
+    folder: Path
+    entries: tuple[EntryResult, ...]
+    index: Path
+    seconds: float
+    contradictions: tuple[str, ...] = field(default=())
+
+
+def entries(quick: bool = False, seed: int = 0) -> tuple[Entry, ...]:
+    """The gallery's entries: Escher blocks, the paper's presets and RhomBlock assemblies.
+
+    ``quick`` keeps one small entry of each kind (for tests); ``seed`` fixes
+    the random deformations and random lozenge tilings.
+
+    >>> [e.name for e in entries(quick=True)]
+    ['escher-p4', 'escher-p1', 'ex3.5-cube-grid', 'rhomblock-hexagon-3x3x3-v0', 'rhomblock-staircase-1-1-0-v1']
+    """
+    if quick:
+        return (_escher("p4", seed, radius=1.0), _escher("p1", seed, radius=1.0), _cube_grid(),
+                _hexagon((3, 3, 3), 0, seed), _staircase((1, 1, 0), 1))
+    out = [_escher(name, seed) for name in ESCHER_GROUPS]
+    out += [_escher(name, seed) for name in REFLECTION_GROUPS]
+    out += [_undeformed("p4"), _fig1(), _cube_grid(), _tilted_cubes(), _tetrahedra(), _modified_cubes()]
+    out += [_hexagon(size, variant, seed) for size in ((4, 4, 4), (8, 8, 8), (20, 20, 20)) for variant in (0, 1)]
+    out += [_staircase(counts, variant) for counts in ((1, 0, 0), (1, 1, 0), (2, 1, 1)) for variant in (0, 1)]
+    return tuple(out)
+
+
+def build(folder, quick: bool = False, seed: int = 0, names=None, progress=None) -> Gallery:
+    """Generate, verify, export and draw every entry into ``folder``, and write ``index.html``.
+
+    Per entry ``NAME``: ``NAME/block.stl`` (the single block), ``NAME/assembly.stl``,
+    ``NAME/exploded.stl``, ``NAME/assembly.glb`` (coloured by orientation or coset),
+    ``NAME/block.png``, ``NAME/assembly.png``, ``NAME/exploded.png``,
+    ``NAME/tiling.png`` (where there is a tiling) and ``NAME/record.json`` with
+    the parameters, the finite verdict with its frame, the periodic verdict
+    (where there is a cell), Criterion 4.3 (Escher blocks), the paper's claims
+    with whether the verdicts agree, and timings.
+
+    Parameters
+    ----------
+    folder : path
+        Created if missing.
+    quick, seed : see :func:`entries`.
+    names : iterable of str, optional
+        Build only these entries.
+    progress : callable, optional
+        Called as ``progress(entry_name)`` after each entry.
+
+    Returns
+    -------
+    Gallery
+        ``contradictions`` lists every claim a verdict contradicts; a correct
+        package leaves it empty.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> g = build(tempfile.mkdtemp(), quick=True, names=["escher-p4"])
+    >>> g.entries[0].record["periodic"]["status"], g.contradictions
+    ('interlocked', ())
+    """
+    start = time.perf_counter()
+    folder = _folder(folder)
+    chosen = entries(quick, seed)
+    if names is not None:
+        wanted = list(names)
+        known = {e.name for e in chosen}
+        unknown = [n for n in wanted if n not in known]
+        if unknown:
+            raise GalleryError(f"unknown gallery entries {unknown}; known: {sorted(known)}")
+        chosen = [e for e in chosen if e.name in wanted]
+    results = []
+    for entry in chosen:
+        results.append(_build_entry(entry, folder, seed))
+        if progress is not None:
+            progress(entry.name)
+    index = _write_index(folder, results, quick, seed)
+    contradictions = tuple(c for r in results for c in r.contradictions)
+    return Gallery(folder, tuple(results), index, time.perf_counter() - start, contradictions)
+
+
+# --- entries --------------------------------------------------------------------------------------
+
+
+def _record_value(record: dict, *keys):
+    for key in keys:
+        if record is None:
+            return None
+        record = record.get(key)
+    return record
+
+
+def _finite_not_moving(source: str) -> Claim:
+    # a motion of the free blocks with the ring fixed is a finite-support motion of the infinite assembly
+    return Claim(source, "no motion of the free blocks of the patch with its ring fixed",
+                 lambda r: None if r["finite"]["interlocked"] is None else r["finite"]["interlocked"] is not False)
+
+
+def _periodic_is(status: str, source: str, key: str = "periodic") -> Claim:
+    return Claim(source, f"the infinite assembly is {status}" + (" (translations)" if "translational" in key else ""),
+                 lambda r: None if _record_value(r, key, "status") in (None, "inconclusive")
+                 else _record_value(r, key, "status") == status)
+
+
+def _finite_is(interlocked: bool, source: str) -> Claim:
+    word = "interlocked" if interlocked else "not interlocked"
+    return Claim(source, f"the finite assembly with its frame is {word}",
+                 lambda r: None if r["finite"]["interlocked"] is None else r["finite"]["interlocked"] is interlocked)
+
+
+def _no_sliding_iff_criterion() -> Claim:
+    return Claim("Prop. 4.6", "the infinite matrix has no kernel (full generic rank) iff Criterion 4.3 holds",
+                 lambda r: (r["periodic"]["generic_rank"] == r["periodic"]["columns"]) == r["criterion_4_3"]["holds"])
+
+
+def _deformation(group, rng) -> dict:
+    """One or two points pushed off every deformable edge (one per pair), a valid block's deformation."""
+    corners = np.asarray(group.fundamental_domain().exterior.coords)
+    for _ in range(100):
+        deformation = {}
+        for s in group.side_pairings():
+            if s.partner < s.edge or s.self_paired:
+                continue
+            p, q = corners[s.edge], corners[s.edge + 1]
+            normal = np.array([q[1] - p[1], p[0] - q[0]])
+            m = int(rng.integers(1, 3))
+            along = (np.arange(1, m + 1) + rng.uniform(-0.25, 0.25, m)) / (m + 1)
+            side = rng.choice([-1.0, 1.0])
+            deformation[s.edge] = p + along[:, None] * (q - p) + side * rng.uniform(0.06, 0.16, (m, 1)) * normal
+        try:
+            escher_block(group, deformation)
+        except DeformationError:
+            continue
+        return {e: points.tolist() for e, points in deformation.items()}
+    raise GalleryError(f"no valid random deformation of {group.name} found; try another seed")
+
+
+def _escher(name: str, seed: int, radius: float = 2.0) -> Entry:
+    def make():
+        group = wallpaper.group(name)
+        deformation = _deformation(group, np.random.default_rng([seed, ESCHER_GROUPS.index(name) if name in
+                                                                 ESCHER_GROUPS else 10 + REFLECTION_GROUPS.index(name)]))
+        block = escher_block(group, deformation)
+        unit = math.sqrt(group.cell_area)
+        return {"block": block, "assembly": patch(block, radius * unit, frame="boundary"),
+                "cell": periodic_cell(block), "tiling": block,
+                "parameters": {"group": name, "deformation": deformation, "height": block.height,
+                               "patch_radius_cells": radius, "frame": "outer ring", "seed": seed}}
+
+    claims = [_finite_not_moving("Cor. 4.8 with the periodic verdict"), _no_sliding_iff_criterion()]
+    if name == "p1":
+        claims.append(Claim("Thm. 4.7", "translationally interlocked iff Criterion 4.3 holds",
+                            lambda r: None if r["periodic_translational"]["status"] == "inconclusive" else
+                            (r["periodic_translational"]["status"] == "interlocked") == r["criterion_4_3"]["holds"]))
+    title = f"{name}: Escher block, every deformable edge deformed"
+    return Entry(f"escher-{name}", title, "escher", make, tuple(claims), translational=name == "p1")
+
+
+def _undeformed(name: str) -> Entry:
+    def make():
+        block = escher_block(wallpaper.group(name), {})
+        return {"block": block, "assembly": patch(block, 1.5, frame="boundary"), "cell": periodic_cell(block),
+                "tiling": block, "parameters": {"group": name, "deformation": {}, "frame": "outer ring"}}
+
+    claims = (Claim("Criterion 4.3", "Criterion 4.3 fails: a finite set H of blocks lifts out",
+                    lambda r: r["criterion_4_3"]["holds"] is False),
+              _periodic_is("not interlocked", "Criterion 4.3 (H lifts out)"), _no_sliding_iff_criterion(),
+              _finite_is(False, "Criterion 4.3 (H lifts out)"))
+    return Entry(f"escher-{name}-undeformed", f"{name}: undeformed prisms (Criterion 4.3 fails)", "escher", make, claims)
+
+
+def _fig1() -> Entry:
+    def make():
+        block = presets.fig1_p6_block()
+        return {"block": block, "assembly": patch(block, 1.5, frame="boundary"), "cell": periodic_cell(block),
+                "tiling": block, "parameters": {"preset": "fig1_p6_block", "frame": "outer ring"}}
+
+    return Entry("fig1-p6", "Fig. 1: the paper's p6 block", "preset", make,
+                 (_finite_not_moving("Cor. 4.8 with the periodic verdict"), _no_sliding_iff_criterion()))
+
+
+def _cube_grid() -> Entry:
+    def make():
+        grid = presets.cube_grid()
+        return {"block": grid.mesh(0), "assembly": grid, "cell": presets.cube_grid_cell(),
+                "parameters": {"preset": "cube_grid", "rows": 3, "cols": 3, "frame": "outer ring"}}
+
+    return Entry("ex3.5-cube-grid", "Ex. 3.5: a grid of cubes slides", "preset", make,
+                 (_finite_is(False, "Ex. 3.5"), _periodic_is("not interlocked", "Ex. 3.5")))
+
+
+def _tilted_cubes() -> Entry:
+    def make():
+        layer = presets.interlocking_cubes()
+        return {"block": layer.mesh(0), "assembly": layer, "cell": presets.interlocking_cubes_cell(),
+                "parameters": {"preset": "interlocking_cubes", "rows": 3, "cols": 3, "frame": "outer ring"}}
+
+    return Entry("ex3.6-tilted-cubes", "Ex. 3.6: the tilted cube layer interlocks", "preset", make,
+                 (_finite_is(True, "Ex. 3.6"), _periodic_is("interlocked", "Ex. 3.6")))
+
+
+def _tetrahedra() -> Entry:
+    def make():
+        layer = presets.tetrahedra("p4", radius=1.5)
+        lower_edge_along_x = [i for i in range(len(layer)) if abs(layer.transforms[i][0, 0]) > 0.5]
+        frame = sorted(set(lower_edge_along_x) | set(layer.frame))
+        return {"block": layer.mesh(0), "assembly": layer.with_frame(frame),
+                "parameters": {"preset": "tetrahedra", "symmetry": "p4", "radius": 1.5,
+                               "frame": "outer ring and one orientation class (Fig. 5a, red)"}}
+
+    return Entry("fig5a-tetrahedra", "Fig. 5a: tetrahedra with a p4 frame", "preset", make,
+                 (_finite_is(True, "Fig. 5a"),))
+
+
+def _modified_cubes() -> Entry:
+    def make():
+        a = presets.modified_cube_assembly()
+        return {"block": presets.modified_cube(), "assembly": a,
+                "parameters": {"preset": "modified_cube_assembly", "rows": 4, "cols": 4, "frame": "outer ring"}}
+
+    return Entry("fig7-modified-cubes", "Fig. 6/7: modified cubes, four move together", "preset", make,
+                 (_finite_is(False, "Fig. 7"),))
+
+
+def _hexagon(size, variant: int, seed: int) -> Entry:
+    a, b, c = size
+
+    def make():
+        tiling = random_hexagon(a, b, c, seed=seed)
+        return {"block": rhomblock(), "assembly": rhomblock_assembly(tiling, variant, frame="boundary"),
+                "tiling": tiling, "parameters": {"hexagon": [a, b, c], "variant": variant, "seed": seed,
+                                                 "frame": "outer ring"}}
+
+    return Entry(f"rhomblock-hexagon-{a}x{b}x{c}-v{variant}",
+                 f"RhomBlocks on a random {a}x{b}x{c} hexagon, variant {variant}", "rhomblock", make,
+                 (_finite_not_moving("Thm. 4.9 (the tiling extends to the plane)"),))
+
+
+def _staircase(counts, variant: int) -> Entry:
+    def make():
+        tiling = staircase(counts)
+        cell = rhomblock_assembly(tiling, variant)
+        return {"block": rhomblock(), "assembly": cell_patch(cell, 2), "cell": cell, "tiling": tiling,
+                "parameters": {"staircase": list(counts), "variant": variant, "patch_radius_cells": 2,
+                               "frame": "ring of cell translates"}}
+
+    label = "-".join(map(str, counts))
+    return Entry(f"rhomblock-staircase-{label}-v{variant}",
+                 f"RhomBlocks on the periodic staircase {tuple(counts)}, variant {variant}", "rhomblock", make,
+                 (_periodic_is("interlocked", "Thm. 4.9"), _finite_not_moving("Thm. 4.9")))
+
+
+# --- building -------------------------------------------------------------------------------------
+
+
+def _folder(folder) -> Path:
+    folder = Path(folder)
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as error:
+        raise GalleryError(f"cannot create the gallery folder {folder}: {error.strerror}") from None
+    return folder
+
+
+def _build_entry(entry: Entry, folder: Path, seed: int) -> EntryResult:
+    timings = {}
+    clock = time.perf_counter()
+    made = entry.make()
+    timings["generate"] = time.perf_counter() - clock
+    assembly: Assembly = made["assembly"]
+    record = {"name": entry.name, "title": entry.title, "kind": entry.kind, "parameters": made["parameters"],
+              "blocks": len(assembly), "frame": list(assembly.frame)}
+
+    clock = time.perf_counter()
+    record["finite"] = check(assembly, validate=False).to_dict()
+    timings["finite_verdict"] = time.perf_counter() - clock
+    record["periodic"] = record["periodic_translational"] = record["criterion_4_3"] = None
+    if "cell" in made:
+        clock = time.perf_counter()
+        record["periodic"] = periodic_check(made["cell"]).to_dict()
+        if entry.translational:
+            record["periodic_translational"] = periodic_check(made["cell"], translational=True).to_dict()
+        timings["periodic_verdict"] = time.perf_counter() - clock
+    if isinstance(made["block"], Block):
+        record["criterion_4_3"] = criterion_4_3(made["block"]).to_dict()
+
+    directory = folder / entry.name
+    directory.mkdir(exist_ok=True)
+    clock = time.perf_counter()
+    spread = 0.6 if entry.kind != "rhomblock" else 0.35
+    files = {"block.stl": made["block"], "assembly.stl": assembly, "assembly.glb": assembly}
+    written = {name: _relative(export(obj, directory / name), folder) for name, obj in files.items()}
+    written["exploded.stl"] = _relative(export(assembly, directory / "exploded.stl", exploded=spread), folder)
+    timings["export"] = time.perf_counter() - clock
+
+    clock = time.perf_counter()
+    pictures = {"block.png": (made["block"], {}), "assembly.png": (assembly, {}),
+                "exploded.png": (assembly, {"exploded": spread})}
+    if "tiling" in made:
+        wide = isinstance(made["tiling"], Block)  # two panels: the tilings by F and by F' (Fig. 1)
+        pictures["tiling.png"] = (made["tiling"], {"view": "tiling", "size": (10.0, 5.0) if wide else (6.0, 6.0)})
+    for name, (obj, options) in pictures.items():
+        written[name] = _relative(render(obj, directory / name, title=None, **options), folder)
+    timings["render"] = time.perf_counter() - clock
+
+    claims, contradictions = [], []
+    for claim in entry.claims:
+        holds = claim.test(record)
+        claims.append({"source": claim.source, "statement": claim.statement, "holds": holds})
+        if holds is False:
+            contradictions.append(f"{entry.name}: contradicts {claim.source}: {claim.statement}")
+    record["claims"] = claims
+    record["timings"] = timings
+    record["files"] = dict(written)
+    record_path = directory / "record.json"
+    record_path.write_text(json.dumps(record, indent=1, default=_json_default))
+    written["record.json"] = _relative(record_path, folder)
+    return EntryResult(entry.name, record, written, tuple(contradictions))
+
+
+def _relative(path, folder: Path) -> str:
+    return Path(path).relative_to(folder).as_posix()
+
+
+def _json_default(value):
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    return str(value)
+
+
+# --- the index page -------------------------------------------------------------------------------
+
+_STYLE = """
+body { font-family: system-ui, sans-serif; margin: 2em; color: #222; background: #fafafa; }
+h1 { margin-bottom: 0.2em; } .lead { color: #555; margin-top: 0; }
+.entry { background: white; border: 1px solid #ddd; border-radius: 8px; padding: 1em; margin: 1.2em 0; }
+.pictures { display: flex; flex-wrap: wrap; gap: 0.5em; } .pictures img { width: 220px; border: 1px solid #eee; }
+.yes { color: #0a7a3a; font-weight: 600; } .no { color: #b3261e; font-weight: 600; } .maybe { color: #a15c00; }
+table { border-collapse: collapse; } td, th { padding: 0.15em 0.7em 0.15em 0; text-align: left; vertical-align: top; }
+.files a { margin-right: 0.8em; } code { background: #f1f1f1; padding: 0 0.2em; }
+"""
+
+
+def _write_index(folder: Path, results, quick: bool, seed: int) -> Path:
+    parts = [f"<!doctype html><html lang='en'><head><meta charset='utf-8'><title>interlock gallery</title>"
+             f"<style>{_STYLE}</style></head><body>",
+             "<h1>interlock gallery</h1>",
+             f"<p class='lead'>{len(results)} entries{' (quick)' if quick else ''}, seed {seed}. "
+             "Every verdict was computed when this page was built; the claims are what the paper proves.</p>"]
+    for result in results:
+        parts.append(_entry_html(result))
+    parts.append("</body></html>")
+    index = folder / "index.html"
+    index.write_text("\n".join(parts), encoding="utf-8")
+    return index
+
+
+def _verdict_word(value) -> str:
+    if value in (True, "interlocked"):
+        return "<span class='yes'>interlocked</span>"
+    if value in (False, "not interlocked"):
+        return "<span class='no'>not interlocked</span>"
+    return "<span class='maybe'>inconclusive</span>"
+
+
+def _entry_html(result: EntryResult) -> str:
+    r, e = result.record, html.escape
+    rows = [f"<tr><th>finite ({r['blocks']} blocks, {len(r['frame'])} fixed)</th><td>"
+            f"{_verdict_word(r['finite']['interlocked'])} — {e(r['finite']['status'])}</td></tr>"]
+    for key, label in (("periodic", "infinite (periodic)"), ("periodic_translational", "infinite, translations")):
+        if r.get(key):
+            rows.append(f"<tr><th>{label}</th><td>{_verdict_word(r[key]['status'])} — {e(r[key]['reason'])}</td></tr>")
+    if r.get("criterion_4_3"):
+        holds = r["criterion_4_3"]["holds"]
+        rows.append(f"<tr><th>Criterion 4.3</th><td>{'holds' if holds else 'fails'}</td></tr>")
+    for claim in r["claims"]:
+        mark = {True: "<span class='yes'>agrees</span>", False: "<span class='no'>CONTRADICTS</span>",
+                None: "<span class='maybe'>cannot tell</span>"}[claim["holds"]]
+        rows.append(f"<tr><th>{e(claim['source'])}</th><td>{e(claim['statement'])}: {mark}</td></tr>")
+    seconds = ", ".join(f"{k.replace('_', ' ')} {v:.2f} s" for k, v in r["timings"].items())
+    pictures = "".join(f"<a href='{e(path)}'><img src='{e(path)}' alt='{e(name)}'></a>"
+                       for name, path in result.files.items() if name.endswith(".png"))
+    links = "".join(f"<a href='{e(path)}' download>{e(name)}</a>" for name, path in result.files.items()
+                    if not name.endswith(".png"))
+    return (f"<div class='entry' id='{e(result.name)}'><h2>{e(r['title'])}</h2>"
+            f"<div class='pictures'>{pictures}</div><table>{''.join(rows)}</table>"
+            f"<p class='files'>Download: {links}</p><p class='lead'>{seconds}</p></div>")
