@@ -214,8 +214,8 @@ def _deformation(group, rng) -> dict:
 def _escher(name: str, seed: int, radius: float = 2.0) -> Entry:
     def make():
         group = wallpaper.group(name)
-        deformation = _deformation(group, np.random.default_rng([seed, ESCHER_GROUPS.index(name) if name in
-                                                                 ESCHER_GROUPS else 10 + REFLECTION_GROUPS.index(name)]))
+        stream = (ESCHER_GROUPS + REFLECTION_GROUPS).index(name)  # each group its own random stream
+        deformation = _deformation(group, np.random.default_rng([seed, stream]))
         block = escher_block(group, deformation)
         unit = math.sqrt(group.cell_area)
         return {"block": block, "assembly": patch(block, radius * unit, frame="boundary"),

@@ -49,6 +49,21 @@ def test_each_entry_has_block_assembly_exploded_stl_a_coloured_glb_pictures_and_
         assert set(record["timings"]) >= {"generate", "finite_verdict", "export", "render"}
 
 
+def test_every_linked_file_loads(gallery):
+    import matplotlib.image
+
+    for result in gallery.entries:
+        for name, path in result.files.items():
+            path = gallery.folder / path
+            if name.endswith(".png"):
+                assert matplotlib.image.imread(path).shape[2] in (3, 4)
+            elif name.endswith(".json"):
+                assert json.loads(path.read_text())["name"] == result.name
+            else:
+                expected = 1 if name.startswith("block.") else result.record["blocks"]
+                assert len(Assembly.load(path)) == expected, (result.name, name)
+
+
 def test_stl_files_reload_block_by_block_watertight_with_the_assembly_volumes(gallery):
     for result in gallery.entries:
         blocks = result.record["blocks"]
