@@ -82,6 +82,7 @@ def _parser() -> argparse.ArgumentParser:
     periodic.add_argument("--staircase", metavar="N0,N1,N2", help="RhomBlocks on the staircase tiling with these counts")
     periodic.add_argument("--variant", type=int, default=0, choices=(0, 1), help="RhomBlock assembly variant")
     periodic.add_argument("--translational", action="store_true", help="translations only")
+    periodic.add_argument("--certify", action="store_true", help="replay the reduction in exact arithmetic")
     periodic.add_argument("--json", action="store_true", help="print JSON instead of text")
     periodic.set_defaults(run=_run_periodic)
 
@@ -231,7 +232,7 @@ def _run_periodic(args) -> int:
         block = escher_block(group, dict(_edge_points(text) for text in args.deform), height=args.height)
         cell = periodic_cell(block)
         criterion = criterion_4_3(block)
-    verdict = periodic_check(cell, translational=args.translational)
+    verdict = periodic_check(cell, translational=args.translational, certify=args.certify)
     if args.json:
         record = verdict.to_dict()
         record["criterion_4_3"] = None if criterion is None else criterion.to_dict()

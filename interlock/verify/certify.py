@@ -28,7 +28,7 @@ import trimesh
 
 from interlock.verify.matrix import InterlockingMatrix
 
-__all__ = ["certify_verdict", "FINITE_STEPS", "OVERLAP_RTOL"]
+__all__ = ["certify_verdict", "certify_reduction", "FINITE_STEPS", "OVERLAP_RTOL", "RANK_POINTS"]
 
 #: Finite steps (fractions of the model size) along a motion.
 FINITE_STEPS = (1e-4, 1e-3, 1e-2)
@@ -197,3 +197,130 @@ def _flint():
 
 def _uncertified(verdict, note):
     return dataclasses.replace(verdict, certified=False, status=f"{verdict.status}; {note}")
+
+
+#: Rational points ``z`` at which the exact rank of the forced rows is taken (full rank at one proves it generic).
+RANK_POINTS = ((2, 3), (Fraction(3, 2), Fraction(-5, 7)))
+
+
+def certify_reduction(symbol, steps, ending: str, translational: bool = False) -> tuple[bool, str]:
+    """Replay the periodic facial reduction in exact rational arithmetic (DESIGN.md "Periodic reduction").
+
+    Every float entry of the symbol ``A(z) = sum A_delta z^delta`` is taken as
+    the exact rational it represents, and the cell motions ``P`` are kept as
+    an exact rational basis.  Each step is proved:
+
+    * ``("stress", z, rows, w)``: an exact ``w' > 0`` on ``rows`` with
+      ``(A(z) P)[rows]^T w' = 0`` (the free weights are the float ones, the
+      pivot weights solved exactly and checked positive): fact 2 forces the rows.
+    * ``("restrict", d)``: the exact kernel ``U`` of the forced rows at a
+      rational point has dimension ``d`` and ``A_delta[forced] P U = 0`` for
+      every ``delta``, so ``U`` is the kernel at every ``z`` (fact 3): ``P <- P U``.
+
+    The ending is then proved: "no kernel" by full exact column rank of the
+    forced rows at one rational ``z`` (the rank there bounds the generic rank
+    from below; fact 1), "cell motion" by an exact non-zero ``u`` with
+    ``A_delta P u = 0`` for every ``delta`` and every row.  "fact 1" (a kernel
+    that is not constant) is not certified here.
+
+    Returns ``(certified, note)``.
+    """
+    flint = _flint()
+    if flint is None:
+        return False, "certification needs python-flint (pip install 'interlock[exact]')"
+    terms = {delta: _fmpq_mat(flint, term) for delta, term in symbol.terms.items()}
+    n = symbol.columns
+    P = flint.fmpq_mat(n, n, [flint.fmpq(int(i == j)) for i in range(n) for j in range(n)])
+    forced = np.zeros(symbol.rows, dtype=bool)
+    for step in steps:
+        if step[0] == "stress":
+            _, z, rows, w = step
+            rows = _well_conditioned_first(symbol(z).real[rows] @ _float(P), np.flatnonzero(rows))
+            if not _positive_kernel_vector(flint, _rows(flint, _at(flint, terms, z), rows) * P, w[rows]):
+                return False, f"not certified: no exact positive stress at z = {tuple(map(float, z))}"
+            forced[rows] = True
+        else:
+            U = _constant_kernel(flint, terms, forced, P)
+            if U is None or U.ncols() != step[1]:
+                return False, "not certified: the kernel of the forced rows is not exactly constant"
+            P = P * U
+    forced_rows = np.flatnonzero(forced)
+    if ending == "no kernel":
+        for z in RANK_POINTS:
+            if (_rows(flint, _at(flint, terms, z), forced_rows) * P).rank() == P.ncols():
+                return True, (f"certified: exact positive stresses force {len(forced_rows)} rows, which have full "
+                              f"exact rank at z = ({z[0]}, {z[1]})")
+        return False, "not certified: the forced rows are not of full exact rank at the rational test points"
+    if ending == "cell motion":
+        everything = np.arange(symbol.rows)
+        stacked = _stack(flint, [_rows(flint, term, everything) * P for term in terms.values()])
+        if _nullspace(flint, stacked):
+            return True, "certified: an exact rational cell motion keeps every row of every A_delta at zero"
+        return False, "not certified: no exact cell motion keeps every contact"
+    return False, f"not certified: the ending '{ending}' has no exact certificate"
+
+
+def _at(flint, terms, z):
+    """``A(z) = sum A_delta z^delta`` exactly, for rational ``z``."""
+    z1, z2 = (flint.fmpq(*Fraction(v).as_integer_ratio()) for v in z)
+    out = None
+    for (d1, d2), term in terms.items():
+        scaled = term * (z1**d1 * z2**d2)
+        out = scaled if out is None else out + scaled
+    return out
+
+
+def _rows(flint, M, rows):
+    return flint.fmpq_mat(len(rows), M.ncols(), [M[int(r), c] for r in rows for c in range(M.ncols())])
+
+
+def _stack(flint, blocks):
+    columns = blocks[0].ncols()
+    entries = [B[r, c] for B in blocks for r in range(B.nrows()) for c in range(columns)]
+    return flint.fmpq_mat(sum(B.nrows() for B in blocks), columns, entries)
+
+
+def _constant_kernel(flint, terms, forced, P):
+    """The exact kernel ``U`` of the forced rows at a rational point, if ``A_delta[forced] P U = 0`` for every delta."""
+    rows = np.flatnonzero(forced)
+    basis = _nullspace(flint, _rows(flint, _at(flint, terms, RANK_POINTS[0]), rows) * P)
+    if not basis:
+        return None
+    U = flint.fmpq_mat(P.ncols(), len(basis), [b[k] for k in range(P.ncols()) for b in basis])
+    for term in terms.values():
+        product = _rows(flint, term, rows) * P * U
+        if any(product[r, c] != 0 for r in range(product.nrows()) for c in range(product.ncols())):
+            return None
+    return U
+
+
+def _well_conditioned_first(M: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """``rows`` reordered so that a well-conditioned row basis of ``M`` comes first (QR with column pivoting)."""
+    _, _, order = scipy.linalg.qr(M.T, pivoting=True, mode="economic")
+    return rows[order]
+
+
+def _float(M) -> np.ndarray:
+    return np.array([[float(M[r, c]) for c in range(M.ncols())] for r in range(M.nrows())])
+
+
+def _positive_kernel_vector(flint, M, w: np.ndarray) -> bool:
+    """Whether an exact ``w' > 0`` with ``M^T w' = 0`` exists near ``w``: free weights from ``w``, pivots solved.
+
+    The pivots are the first independent rows of ``M``: order them well-conditioned first.
+    """
+    if len(w) == 0 or np.any(w <= 0):
+        return False
+    reduced, rank = M.transpose().rref()
+    m = M.nrows()
+    pivots, row = [], 0
+    for col in range(m):
+        if row < rank and reduced[row, col] != 0:
+            pivots.append(col)
+            row += 1
+    exact = {j: flint.fmpq(*Fraction(float(w[j])).as_integer_ratio()) for j in range(m) if j not in set(pivots)}
+    for r, p in enumerate(pivots):
+        value = -sum((reduced[r, j] * wj for j, wj in exact.items()), flint.fmpq(0))
+        if value <= 0:
+            return False
+    return True

@@ -130,7 +130,7 @@ def test_lp_values_report_each_positive_z_tried():
 
 
 def _undecided(A, at_points):
-    return periodic._Reduction("inconclusive", "forced undecided for the test", 1, 0, ())
+    return periodic._Reduction("inconclusive", "forced undecided for the test", 1, 0, (), (), "undecided")
 
 
 def test_an_undecided_reduction_falls_back_to_patches_that_find_a_motion(monkeypatch):
@@ -163,3 +163,35 @@ def test_symbol_and_quadruples():
 def test_a_cell_needs_a_lattice():
     with pytest.raises(InterlockError, match="needs a periodic cell"):
         periodic_check(Assembly.from_meshes(presets.cube_grid().world_meshes()))
+
+
+@pytest.mark.parametrize("name,status", [("cube grid", "not interlocked"), ("tilted cubes", "interlocked"),
+                                         ("p4 seed 0", "interlocked"), ("p6 seed 1", "interlocked"),
+                                         ("rhomblock (1,0,0)", "interlocked"), ("p1 seed 3", "not interlocked")])
+def test_certified_periodic_verdicts_replay_the_reduction_exactly(name, status):
+    v = periodic_check(CELLS[name], certify=True)
+    assert v.status == status and v.certified and "; certified: " in v.reason and "not certified" not in v.reason
+    assert v.to_dict()["certified"] is True
+
+
+def test_certification_refuses_a_wrong_ending():
+    from interlock.verify.certify import certify_reduction
+
+    cell = presets.cube_grid_cell()
+    A = symbol(cell)
+    rng = np.random.default_rng(0)
+    reduction = periodic._reduce(A, [A(np.exp(2j * np.pi * rng.random(2))) for _ in range(2)])
+    assert reduction.ending == "cell motion"
+    # the grid's forced rows keep the vertical lift: claiming "no kernel" must not be certified
+    ok, note = certify_reduction(A, reduction.steps, "no kernel")
+    assert not ok and "not of full exact rank" in note
+    # a stress step with a weight vector that is not a stress is refused too
+    _, z, rows, w = reduction.steps[0]
+    ok, note = certify_reduction(A, [("stress", z, rows, -w)], "cell motion")
+    assert not ok and "no exact positive stress" in note
+
+
+def test_float_data_that_breaks_exact_dependencies_is_reported_not_certified():
+    # rounding sqrt(3) geometry to floats makes some stress rows exactly independent: say so, claim nothing
+    v = periodic_check(CELLS["rhomblock (1,1,0) v1"], certify=True)
+    assert v.status == "interlocked" and not v.certified and "not certified: no exact positive stress" in v.reason
