@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from contextlib import contextmanager
 from dataclasses import dataclass, field
@@ -54,7 +55,13 @@ class Verdict:
     interlocked by Prop. 3.10), False (a first-order motion exists: *not
     infinitesimally interlocked* — which does not by itself show that blocks
     can really move, see DESIGN.md) or None when the floating-point evidence is
-    inconclusive.
+    inconclusive.  An inconclusive verdict may still carry the candidate
+    ``motion`` it could not confirm (see ``bent_contacts``).
+
+    ``bent_contacts`` counts the contacts whose facets are planar only within
+    the contact tolerances (:attr:`~interlock.verify.contacts.Contact.planar`):
+    a first-order motion that slides across one of them is not reported as
+    False, since the real, bent faces may block it.
     """
 
     interlocked: bool | None
@@ -70,6 +77,7 @@ class Verdict:
     certified: bool = False
     translational: bool = False
     contacts: int = 0
+    bent_contacts: int = 0
     tolerances: dict = field(default_factory=dict)
     timings: dict = field(default_factory=dict)
 
@@ -94,6 +102,7 @@ class Verdict:
             "certified": self.certified,
             "translational": self.translational,
             "contacts": self.contacts,
+            "bent_contacts": self.bent_contacts,
             "tolerances": dict(self.tolerances),
             "timings": dict(self.timings),
         }
@@ -173,8 +182,9 @@ def check(assembly: Assembly, frame=None, translational: bool = False, certify: 
     fixed = tuple(sorted(set(range(len(assembly))) - set(A.free.tolist())))
     tolerances = {"rank_rtol": rank_rtol, "rank_clear_rtol": RANK_CLEAR_RTOL, "lp_tol": lp_tol, "moving_rtol": MOVING_RTOL,
                   "length_scale": A.length_scale}
+    bent = np.array([not c.planar for c in found], dtype=bool)
     base = dict(frame=fixed, shape=A.shape, translational=translational, contacts=len(found),
-                tolerances=tolerances, timings=timings)
+                bent_contacts=int(bent.sum()), tolerances=tolerances, timings=timings)
     if len(A.free) == 0:
         return Verdict(True, "every block is in the frame: nothing can move", rank=0, lp_value=0.0, **base)
 
@@ -186,20 +196,26 @@ def check(assembly: Assembly, frame=None, translational: bool = False, certify: 
 
     n = A.shape[1]
     no_frame = " (no frame: a finite assembly without fixed blocks can always move as a whole)" if not fixed else ""
+    motions = []  # candidate "not interlocked" verdicts: the first one that survives bent contacts is the answer
     if rank_clear and rank < n:
-        motion, moving = _motion(A, kernel[:, 0], len(assembly), reversible=True)
+        rigid = _rigid_across_bends(A, kernel, [c for c, b in zip(found, bent) if b], assembly.centroids)
+        motion, moving = _motion(A, (rigid if rigid.shape[1] else kernel)[:, 0], len(assembly), reversible=True)
         at_least = "at least " if kernel.shape[1] >= MAX_KERNEL_PROBE else ""
-        verdict = Verdict(False, f"{_names(moving)} a first-order motion that keeps every contact "
-                          f"(A x = 0, kernel dimension {at_least}{n - rank}){no_frame}", rank=rank, lp_value=lp_value,
-                          motion=motion, motion_kind="sliding", moving=moving, stress=stress, **base)
+        motions.append(Verdict(False, f"{_names(moving)} a first-order motion that keeps every contact "
+                               f"(A x = 0, kernel dimension {at_least}{n - rank}){no_frame}", rank=rank,
+                               lp_value=lp_value, motion=motion, motion_kind="sliding", moving=moving, stress=stress,
+                               **base))
+    if stress is None and lp_value is not None and lp_value > lp_tol:
+        motion, moving = _motion(A, lp_motion, len(assembly), reversible=False)
+        motions.append(Verdict(False, f"{_names(moving)} a first-order motion that opens contacts "
+                               f"(LP value {lp_value:.3g}){no_frame}", rank=rank, lp_value=lp_value,
+                               motion=motion, motion_kind="opening", moving=moving, **base))
+    if motions:
+        motions = [_unless_bent(v, A, found, assembly.centroids) for v in motions] if bent.any() else motions
+        verdict = next((v for v in motions if v.interlocked is False), motions[0])
     elif stress is not None and rank_clear:
         verdict = Verdict(True, f"positive self-stress on all {A.shape[0]} rows and full column rank",
                           rank=rank, lp_value=0.0, stress=stress, **base)
-    elif stress is None and lp_value is not None and lp_value > lp_tol:
-        motion, moving = _motion(A, lp_motion, len(assembly), reversible=False)
-        verdict = Verdict(False, f"{_names(moving)} a first-order motion that opens contacts "
-                          f"(LP value {lp_value:.3g}){no_frame}", rank=rank, lp_value=lp_value,
-                          motion=motion, motion_kind="opening", moving=moving, **base)
     else:
         why = "the rank is within the tolerance band" if not rank_clear else "the LPs found neither a stress nor a motion"
         verdict = Verdict(None, f"floating point is not conclusive: {why}", rank=rank, lp_value=lp_value,
@@ -363,6 +379,75 @@ def _motion(A: InterlockingMatrix, x, blocks: int, reversible: bool):
     if reversible and flat.size and flat[np.argmax(np.abs(flat))] < 0:
         motion = -motion
     return motion, moving
+
+
+def _rigid_across_bends(A: InterlockingMatrix, kernel: np.ndarray, bent, centroids) -> np.ndarray:
+    """The kernel motions that move no block relative to its neighbour across a bent contact (orthonormal columns).
+
+    Such a motion keeps the real faces of a bent contact together whatever
+    their bend, so it is a sliding motion of the real assembly too.  Two
+    blocks move as one rigid body when their twists agree as motions of
+    space: the same ``omega``, and translations about the two centroids that
+    differ by ``omega x (c_j - c_i)``; a free block against a fixed one stands still.
+    """
+    if not len(bent) or not kernel.shape[1]:
+        return kernel
+    size = A.block_size
+    column = {int(b): size * k for k, b in enumerate(A.free)}
+    entries = []  # (equation, column, coefficient); equation e says sum coefficient * x[column] = 0
+    for c in bent:
+        i, j = column.get(c.i), column.get(c.j)
+        if i is None and j is None:
+            continue
+        first = len(entries) and entries[-1][0] + 1
+        for k in range(size):
+            entries += [(first + k, col + k, sign) for col, sign in ((j, 1.0), (i, -1.0)) if col is not None]
+        if i is not None and j is not None and not A.translational:
+            # t_j - t_i = omega_i x (c_j - c_i), lengths over the model size: -(omega x arm) = arm x omega
+            arm_x = np.cross(np.eye(3), (centroids[c.j] - centroids[c.i]) / A.length_scale)
+            entries += [(first + 3 + r, i + q, arm_x[r, q]) for r in range(3) for q in range(3)]
+    if not entries:
+        return kernel
+    equation, col, value = np.array(entries).T
+    C = sp.csr_matrix((value, (equation.astype(int), col.astype(int))), shape=(int(equation.max()) + 1, A.shape[1]))
+    _, sigma, vt = scipy.linalg.svd(np.atleast_2d(C @ kernel))
+    sigma = np.concatenate([sigma, np.zeros(kernel.shape[1] - len(sigma))])
+    return kernel @ vt[sigma <= MOVING_RTOL].T
+
+
+def _unless_bent(verdict: Verdict, A: InterlockingMatrix, found, centroids) -> Verdict:
+    """The "not interlocked" verdict, or an inconclusive one when its motion slides across a bent contact.
+
+    A contact whose facets the tolerances merged from triangles bent by a
+    small angle (``Contact.planar`` False) stands for several planes, the
+    model for one.  A motion that keeps such a contact closed while one block
+    moves along the other is admissible for the model, but the real bend may
+    block it (a fold of any angle stops a slide across it): floating point
+    cannot tell, so the verdict becomes None, naming the contacts.  A motion
+    that opens the contact, or moves both blocks together, stays conclusive.
+    """
+    rows = np.flatnonzero([not found[c].planar for c in A.row_contact])
+    twists = verdict.motion[A.free]
+    columns = twists[:, 3:] if A.translational else np.hstack([twists[:, :3], twists[:, 3:] / A.length_scale])
+    opening = np.asarray(A.matrix @ columns.ravel())
+    if verdict.motion_kind == "opening":
+        rows = rows[opening[rows] <= MOVING_RTOL * opening.max()]
+    contacts = [found[c] for c in A.row_contact[rows]]
+    points = np.array([c.vertices[v] for c, v in zip(contacts, A.row_vertex[rows])]).reshape(-1, 3)
+    ends = np.array([(c.i, c.j) for c in contacts], dtype=int).reshape(-1, 2)
+    motion = verdict.motion
+    velocity = [np.cross(motion[b, :3], points - centroids[b]) + motion[b, 3:] for b in ends.T]
+    sliding = np.linalg.norm(velocity[1] - velocity[0], axis=1) > MOVING_RTOL if len(rows) else np.zeros(0, bool)
+    across = sorted(set(A.row_contact[rows[sliding]].tolist()))
+    if not across:
+        return verdict
+    worst = max((found[c] for c in across), key=lambda c: c.deviation)
+    return dataclasses.replace(verdict, interlocked=None, status=(
+        f"floating point is not conclusive: {_names(verdict.moving)} a first-order {verdict.motion_kind} motion, but "
+        f"it slides across {len(across)} contact(s) whose faces are planar only within the contact tolerances "
+        f"(blocks {worst.i}-{worst.j}: faces bent by up to {worst.deviation:.3g}, "
+        f"{worst.deviation / A.length_scale:.3g} x model size), which the real faces may block; smaller contact "
+        "tolerances (contacts(..., rtol=, angle_tol=)) keep such faces apart"))
 
 
 def _names(blocks) -> str:

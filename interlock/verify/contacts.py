@@ -26,6 +26,7 @@ __all__ = [
     "DEFAULT_CONTACT_RTOL",
     "DEFAULT_ANGLE_TOL",
     "DEFAULT_AREA_RTOL",
+    "PLANAR_ULPS",
 ]
 
 #: Distance tolerance relative to the model size: two planes closer than this
@@ -45,6 +46,12 @@ OVERLAY_GRID_RTOL = 1e-13
 #: Instanced pairs of one kind (:meth:`Assembly.pair_kinds`) share one contact computation; that path is
 #: taken when kinds are at most this share of the pairs.
 KIND_SHARE = 0.5
+
+#: A facet is planar when every vertex of its triangles lies within this many units in the last place (of
+#: the mesh's largest coordinate) of its plane, i.e. within rounding; farther means the tolerances grouped
+#: triangles that are not coplanar (a face bent by less than ``angle_tol``).  A bend of 1e-14 on a unit
+#: block is about 25 such units; rounding leaves well under one.
+PLANAR_ULPS = 8
 
 # Floor for tolerances of zero in the spatial index (relative; keeps its metric finite).
 _TINY = 1e-15
@@ -79,6 +86,16 @@ class Contact:
         A point of the plane (the centroid of block ``i``'s facet).
     basis : array (2, 3)
         Orthonormal in-plane vectors with ``basis[0] x basis[1] = normal``.
+    deviation : float
+        How far the blocks' real faces stray from the modelled common plane
+        over this contact: the flatness of either facet (:attr:`Facets.flatness`)
+        plus the largest distance of a contact vertex from block ``j``'s facet
+        plane.  Zero up to rounding for faces that really are coplanar.
+    planar : bool
+        Both facets are planar up to rounding (:attr:`Facets.planar`).  When
+        False, the tolerances merged triangles bent by a small angle into one
+        facet: the real contact has several planes, so it may block a sliding
+        motion that the modelled one allows.
     """
 
     i: int
@@ -91,6 +108,8 @@ class Contact:
     polygon: shapely.Polygon = field(repr=False)
     origin: np.ndarray = field(repr=False)
     basis: np.ndarray = field(repr=False)
+    deviation: float = 0.0
+    planar: bool = True
 
     @property
     def ring_sizes(self) -> tuple[int, ...]:
@@ -102,14 +121,16 @@ class Contact:
         n = ", ".join(f"{x:.3g}" for x in self.normal)
         holes = len(self.ring_sizes) - 1
         extra = f" with {holes} hole(s)" if holes else ""
+        bent = "" if self.planar else f", faces bent by up to {self.deviation:.3g} (planar only within tolerance)"
         return (f"contact {self.i}-{self.j}: {len(self.vertices)} vertices{extra}, area {self.area:.6g}, "
-                f"normal ({n}), facets {self.facet_i}/{self.facet_j}")
+                f"normal ({n}), facets {self.facet_i}/{self.facet_j}{bent}")
 
     def to_dict(self) -> dict:
         """JSON-serialisable form; ``ring_sizes`` splits ``vertices`` into exterior and holes."""
         return {"i": self.i, "j": self.j, "normal": self.normal.tolist(), "vertices": self.vertices.tolist(),
                 "ring_sizes": list(self.ring_sizes), "area": self.area, "facet_i": self.facet_i,
-                "facet_j": self.facet_j, "origin": self.origin.tolist(), "basis": self.basis.tolist()}
+                "facet_j": self.facet_j, "origin": self.origin.tolist(), "basis": self.basis.tolist(),
+                "deviation": self.deviation, "planar": self.planar}
 
 
 @dataclass(frozen=True, eq=False)
@@ -120,6 +141,9 @@ class Facets:
     holes) placed by ``origins[f] + x * bases[f, 0] + y * bases[f, 1]``; its
     outward normal is ``normals[f] = bases[f, 0] x bases[f, 1]``; ``faces[f]``
     lists its triangles.  Facets are ordered by their lowest triangle index.
+    ``flatness[f]`` is the largest distance of a vertex of its triangles from
+    its plane, and ``planar[f]`` says whether that is rounding only
+    (:data:`PLANAR_ULPS`) rather than a bend the tolerances accepted.
     """
 
     normals: np.ndarray
@@ -127,6 +151,8 @@ class Facets:
     bases: np.ndarray
     polygons: np.ndarray
     faces: tuple[np.ndarray, ...]
+    flatness: np.ndarray
+    planar: np.ndarray
 
     def __len__(self) -> int:
         return len(self.normals)
@@ -366,9 +392,15 @@ def _facets(mesh: trimesh.Trimesh, atol: float, angle_tol: float) -> Facets:
     for f, group in enumerate(groups):
         polygons[f] = triangles[group[0]] if len(group) == 1 else shapely.union_all(triangles[group])
     polygons = _clean(polygons, atol)
-    for array in (nrm, org, bases, polygons):
+    # how far the grouped triangles really are from their common plane: rounding, or a bend within tolerance
+    offsets = np.abs(np.einsum("fvi,fi->fv", tri[used] - org[lab][:, None], nrm[lab])).max(axis=1)
+    flatness = np.zeros(n_facets)
+    np.maximum.at(flatness, lab, offsets)
+    magnitude = float(np.abs(mesh.vertices).max(initial=0.0)) or 1.0
+    planar = flatness <= PLANAR_ULPS * np.finfo(float).eps * magnitude
+    for array in (nrm, org, bases, polygons, flatness, planar):
         array.setflags(write=False)
-    return Facets(nrm, org, bases, polygons, tuple(used[g] for g in groups))
+    return Facets(nrm, org, bases, polygons, tuple(used[g] for g in groups), flatness, planar)
 
 
 def _unshared_vertex(faces_small, faces_big):
@@ -462,6 +494,7 @@ class _FacetTable:
         self.local = np.arange(total) - self.start[self.block]
         self.normals, self.origins = np.empty((total, 3)), np.empty((total, 3))
         self.bases, self.polygons = np.empty((total, 2, 3)), np.empty(total, dtype=object)
+        self.flatness, self.planar = np.empty(total), np.empty(total, dtype=bool)
         rot, shift = assembly.transforms[:, :3, :3], assembly.transforms[:, :3, 3]
         mirrored = assembly.mirrored
         for t, f in per_type.items():
@@ -480,6 +513,8 @@ class _FacetTable:
                     polygons = _clean(shapely.transform(polygons, lambda xy: xy * [1.0, -1.0]), 0.0)
                 self.bases[rows] = bases
                 self.polygons[rows] = np.tile(polygons, len(blocks))
+                self.flatness[rows] = np.tile(f.flatness, len(blocks))
+                self.planar[rows] = np.tile(f.planar, len(blocks))
 
 
 def _matches(table: _FacetTable, pairs, atol, angle_tol, scale):
@@ -554,11 +589,14 @@ def _overlaps(table: _FacetTable, gi, gj, atol, area_tol, grid) -> tuple[Contact
     order = np.lexsort((np.arange(len(parts)), facet_j, facet_i, block_j, block_i))
     found = []
     for p in order:
-        g_i = gi[k[p]]
+        g_i, g_j = gi[k[p]], gj[k[p]]
         arrays = [table.normals[g_i].copy(), per_part[p], table.origins[g_i].copy(), table.bases[g_i].copy()]
         for array in arrays:
             array.setflags(write=False)
         normal, vertices, origin, basis = arrays
+        apart = float(np.abs((vertices - table.origins[g_j]) @ table.normals[g_j]).max())
+        deviation = float(table.flatness[g_i] + table.flatness[g_j]) + apart
         found.append(Contact(int(block_i[p]), int(block_j[p]), normal, vertices, float(area[p]),
-                             int(facet_i[p]), int(facet_j[p]), parts[p], origin, basis))
+                             int(facet_i[p]), int(facet_j[p]), parts[p], origin, basis, deviation,
+                             bool(table.planar[g_i] and table.planar[g_j])))
     return tuple(found)

@@ -99,6 +99,50 @@ def test_topolite_ania_moves(shared_data):
     assert v.interlocked is False and v.moving == (0,)
 
 
+def folded_slot(bend):
+    """A block between fixed blocks on its left, below and above, and on its right a fixed block that meets it
+    in a face folded along a vertical ridge ``bend`` out of plane: the block slides along y iff ``bend == 0``."""
+    from shapely import Polygon
+
+    ridge = Polygon([(0, 0), (1, 0), (1 + bend, 0.5), (1, 1), (0, 1)])
+    valley = Polygon([(1, 0), (2, 0), (2, 1), (1, 1), (1 + bend, 0.5)])
+    box = lambda lo, hi: trimesh.creation.box(bounds=[lo, hi])  # noqa: E731
+    meshes = [trimesh.creation.extrude_polygon(ridge, 1.0), trimesh.creation.extrude_polygon(valley, 1.0),
+              box([-1, 0, 0], [0, 1, 1]), box([-1, 0, -1], [2, 1, 0]), box([-1, 0, 1], [2, 1, 2])]
+    return Assembly.from_meshes(meshes, frame=[1, 2, 3, 4])
+
+
+def test_fold_blocks_the_slide_of_example_3_5():
+    assert check(folded_slot(0.0), certify=True).motion_kind == "sliding"
+    v = check(folded_slot(1e-3), certify=True)
+    assert v.interlocked is True and v.certified and v.bent_contacts == 0
+
+
+def test_sliding_across_a_face_bent_within_tolerance_is_inconclusive():
+    # the tolerances merge the fold's halves into one plane, along which the block would slide: the
+    # real fold blocks that, so the verdict must not be "not interlocked" (nor certified)
+    slot = folded_slot(1e-7)
+    v = check(slot)
+    assert v.interlocked is None and v.bent_contacts == 1 and v.motion_kind == "sliding"
+    assert "planar only within the contact tolerances" in v.status and "blocks 0-1" in v.status
+    certified = check(slot, certify=True)
+    assert certified.interlocked is None and not certified.certified and "nothing to certify" in certified.status
+    assert check(slot, contacts=contacts(slot, rtol=1e-12, angle_tol=1e-12)).interlocked is not False
+
+
+def test_motions_that_open_a_bent_contact_or_keep_it_rigid_stay_conclusive():
+    slot = folded_slot(1e-7)
+    pair = Assembly.from_meshes(slot.world_meshes()[:2], frame=[1])
+    v = check(pair)  # the block could slide along the merged plane, but it can also simply leave
+    assert v.interlocked is False and v.motion_kind == "opening" and v.bent_contacts == 1
+    assert v.moving == (0,) and v.motion[0, 3] < 0
+    held = Assembly.from_meshes(slot.world_meshes() + [trimesh.creation.box(bounds=[[2, 0, 0], [3, 1, 1]])],
+                                frame=[2, 3, 4, 5])
+    v = check(held)  # both sides of the fold can slide together in y, which no bend can stop
+    assert v.interlocked is False and v.motion_kind == "sliding" and v.moving == (0, 1)
+    np.testing.assert_allclose(v.motion[0], v.motion[1], atol=1e-9)
+
+
 def test_empty_frame_is_legal_and_never_interlocked():
     v = check(presets.interlocking_cubes(), frame=[])
     assert v.interlocked is False and "no frame" in v.status

@@ -165,6 +165,29 @@ def test_tilted_face_within_angle_tolerance():
     assert contacts(a, angle_tol=1e-5) == ()
 
 
+def folded_pair(bend):
+    """A block whose +x face is folded along a vertical ridge ``bend`` out of plane, and its matching neighbour."""
+    ridge = shapely.Polygon([(0, 0), (1, 0), (1 + bend, 0.5), (1, 1), (0, 1)])
+    valley = shapely.Polygon([(1, 0), (2, 0), (2, 1), (1, 1), (1 + bend, 0.5)])
+    return Assembly.from_meshes([prism(ridge), prism(valley)])
+
+
+def test_face_bent_within_tolerance_is_one_facet_marked_not_planar():
+    bend = 1e-7
+    pair = folded_pair(bend)
+    fold = facets(pair.meshes[0])
+    assert len(fold) == 6 and fold.planar.sum() == 5  # the two halves of the ridge face merged
+    assert fold.flatness[~fold.planar][0] == pytest.approx(bend / 2, rel=1e-3)
+    assert fold.flatness[fold.planar].max() < 1e-15
+    (c,) = contacts(pair)
+    assert not c.planar and c.deviation == pytest.approx(bend, rel=1e-3)
+    assert "planar only within tolerance" in str(c) and c.to_dict()["planar"] is False
+    pieces = contacts(pair, rtol=1e-12, angle_tol=1e-12)  # little slack: every piece of the fold is planar
+    assert all(h.planar and h.deviation < 1e-15 for h in pieces) and sum(h.area for h in pieces) == pytest.approx(1)
+    assert sorted(h.normal[1] for h in pieces) == pytest.approx([-2 * bend, 2 * bend])
+    assert all(c.planar and c.deviation == 0 for c in contacts(grid_3x3()))
+
+
 def test_bad_input():
     with pytest.raises(ContactError, match="Assembly"):
         contacts([cube(0, 0), cube(1, 0)])

@@ -1,0 +1,376 @@
+"""Stability where methods fail: which verdict each method gives as an assembly approaches degeneracy.
+
+Three families, each with a truth known exactly for every parameter value:
+
+A. **δ, an Escher edge that flattens.**  A p1 block with one intermediate
+   point at distance δ from the line of edge 0 (its partner, edge 2, receives
+   the image point; edges 1 and 3 stay straight).  For every δ > 0 the deformed
+   pair makes ``S = <g_e>`` infinite, so Criterion 4.3 holds and the infinite
+   assembly is translationally interlocked (Thm. 4.7); so is a finite patch
+   with its outer ring fixed (a motion of its free blocks is a finite-support
+   motion of the infinite assembly).  At δ = 0 every block is a prism that
+   slides out vertically.  The determinants in the proof of Lemma 4.5 are
+   proportional to δ, and the three side triangles over the edge become
+   coplanar as δ -> 0.  Verdicts: ``periodic_check`` of the cell,
+   ``criterion_4_3`` of the block, and ``check`` of a patch (radius 2, ring
+   fixed), all translational.
+B. **ε, a folded contact face.**  The 3 x 3 cube grid of Ex. 3.5 (ring fixed)
+   whose middle cube has its +x face folded into a ridge, each half tilted by
+   ε (its neighbour has the matching valley).  At ε = 0 the middle cube slides
+   up (Ex. 3.5).  For every ε > 0 the two halves' normals have vertical
+   components of opposite signs, so neither up nor down keeps the contact; the
+   other faces are those of Ex. 3.5, whose contact cone is the vertical line
+   (a positive self-stress on all rows and rank 5), so only a motion close to
+   vertical could survive, and it cannot: the middle cube is infinitesimally
+   interlocked (exact certificates for ε >= 1e-5 confirm it).  Verdicts:
+   ``check`` with rotations.
+C. **s, a change of units.**  Ex. 3.6's tilted cube layer (interlocked),
+   Ex. 3.5's cube grid (the middle cube slides) and a p4 Escher patch with its
+   ring fixed (interlocked, exact certificate) with every coordinate
+   multiplied by s = 1e-6 ... 1e6.  Tolerances are relative to the model size,
+   so no verdict may change; their periodic cells likewise.
+
+Methods are the floating-point LP + rank with its default tolerances
+(contacts ``rtol`` 1e-5, ``angle_tol`` 1e-4; ``rank_rtol`` 1e-9), with looser
+and tighter rank or contact tolerances, and ``certify=True`` (exact
+arithmetic).  Each verdict is classified as correct, wrong, inconclusive
+(``interlocked`` None or status "inconclusive"; in certified mode also any
+verdict left uncertified) or refused (an ``InterlockError`` while building).
+
+Reading the chart: one panel per family, one row per method, one column per
+parameter value (δ and ε decreasing to the right, ending at 0; s increasing);
+green correct, red wrong, grey inconclusive, white refused; "c" marks an
+exact certificate.  The title states δ*, the smallest δ at which ``check``'s
+default verdict is still correct for every larger δ (a black line in panels A
+and B).  Below it the default contact tolerances merge the bent side faces
+into one plane; ``check`` then says "inconclusive" and names the contacts
+whose faces are planar only within tolerance, and ``certify=True`` has
+nothing to certify.  With contact tolerances tight enough to keep the bend,
+the rank is inconclusive down to about 1e-8 and below that ``rank_rtol`` =
+1e-9 calls the vanishing singular value zero: those rows are wrong at
+1e-9 ... 1e-11, and ``certify=True`` confirms them by finite steps whose
+overlap is below its volume tolerance.  ``periodic_check`` (which does not yet
+look at bent contacts) and ``criterion_4_3`` (which counts points within
+1e-9 of the edge's line as on it) are wrong below 1e-4 and 1e-9.  Below about
+1e-15, a few units in the last place of the coordinates, the input itself no
+longer resolves δ.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+import warnings
+
+import numpy as np
+import shapely
+import trimesh
+
+from benchmarks.common import main, pyplot, save_chart, write_json
+from interlock import wallpaper
+from interlock.blocks import Assembly, escher_block, patch, periodic_cell, presets
+from interlock.errors import InterlockError
+from interlock.verify import check, contacts, criterion_4_3, periodic_check
+
+DELTAS = tuple(10.0**-k for k in range(1, 15)) + (0.0,)
+QUICK_DELTAS = (1e-1, 1e-4, 1e-5, 1e-9, 1e-14, 0.0)
+SCALES = tuple(10.0**k for k in range(-6, 7, 2))
+QUICK_SCALES = (1e-6, 1.0, 1e6)
+#: Patch radius (in lattice units of p1, a = 1) of family A.
+PATCH_RADIUS = 2.0
+#: Contact tolerances (rtol, angle_tol) of the non-default rows.
+LOOSE_CONTACTS = (1e-3, 1e-2)
+TIGHTER_CONTACTS = (1e-8, 1e-8)
+TIGHT_CONTACTS = (1e-12, 1e-12)
+
+CLASSES = ("correct", "wrong", "inconclusive", "refused")
+COLOURS = {"correct": "#4daf4a", "wrong": "#e41a1c", "inconclusive": "#bdbdbd", "refused": "#ffffff"}
+
+
+def _check_method(rank_rtol=None, contact_tolerances=None, certify=False, translational=False):
+    """A method: ``check`` of an assembly with the given tolerances, as (interlocked, certified, status)."""
+    def method(assembly):
+        found = None if contact_tolerances is None else contacts(assembly, *contact_tolerances)
+        options = {} if rank_rtol is None else {"rank_rtol": rank_rtol}
+        v = check(assembly, translational=translational, certify=certify, contacts=found, **options)
+        return v.interlocked, v.certified, v.status
+    return method
+
+
+def _methods(translational: bool) -> dict:
+    """The ``check`` variants compared in families A and B, by row label."""
+    t = translational
+    return {
+        "check: defaults": _check_method(translational=t),
+        "check: rank_rtol 1e-6": _check_method(rank_rtol=1e-6, translational=t),
+        "check: rank_rtol 1e-12": _check_method(rank_rtol=1e-12, translational=t),
+        "check: contacts 1e-3, 1e-2 rad": _check_method(contact_tolerances=LOOSE_CONTACTS, translational=t),
+        "check: contacts 1e-8": _check_method(contact_tolerances=TIGHTER_CONTACTS, translational=t),
+        "check: contacts 1e-12": _check_method(contact_tolerances=TIGHT_CONTACTS, translational=t),
+        "check: contacts 1e-12, rank_rtol 1e-12": _check_method(rank_rtol=1e-12, contact_tolerances=TIGHT_CONTACTS,
+                                                         translational=t),
+        "certify=True": _check_method(certify=True, translational=t),
+        "certify=True, contacts 1e-12": _check_method(certify=True, contact_tolerances=TIGHT_CONTACTS, translational=t),
+    }
+
+
+def _classify(answer, certified: bool, truth: bool, certified_mode: bool) -> str:
+    if answer is None or (certified_mode and not certified):
+        return "inconclusive"
+    return "correct" if answer == truth else "wrong"
+
+
+def _outcome(method, subject, truth: bool, certified_mode: bool) -> dict:
+    """Run one method on one subject (or on the error that building it raised) and classify the answer."""
+    if isinstance(subject, InterlockError):
+        return {"verdict": "refused", "certified": False, "status": str(subject), "seconds": 0.0,
+                "class": "refused"}
+    start = time.perf_counter()
+    try:
+        answer, certified, status = method(subject)
+    except InterlockError as error:
+        return {"verdict": "refused", "certified": False, "status": str(error),
+                "seconds": time.perf_counter() - start, "class": "refused"}
+    seconds = time.perf_counter() - start
+    return {"verdict": answer, "certified": bool(certified), "status": status, "seconds": seconds,
+            "class": _classify(answer, certified, truth, certified_mode)}
+
+
+def _build(factory, value):
+    """``factory(value)``, or the InterlockError it raised (a refusal is a verdict too)."""
+    try:
+        return factory(value)
+    except InterlockError as error:
+        return error
+
+
+# --- family A: an Escher edge at distance delta from its line ---------------------------------
+
+
+def _p1_block(delta: float):
+    """The p1 block whose edge 0 has one point at distance ``delta`` from the edge's line, 40% along."""
+    group = wallpaper.group("p1")
+    p, q = np.asarray(group.fundamental_domain().exterior.coords)[:2]
+    along = (q - p) / np.linalg.norm(q - p)
+    outward = np.array([along[1], -along[0]])
+    return escher_block(group, {0: [p + 0.4 * (q - p) + delta * outward]})
+
+
+def _periodic(block):
+    return _periodic_answer(periodic_check(periodic_cell(block), translational=True))
+
+
+def _periodic_answer(verdict):
+    return {"interlocked": True, "not interlocked": False}.get(verdict.status), False, str(verdict)
+
+
+def _criterion(block):
+    result = criterion_4_3(block)
+    return result.holds, False, str(result)
+
+
+def _family_a(deltas) -> dict:
+    methods = {"periodic_check (cell)": _periodic, "criterion_4_3 (block)": _criterion}
+    patch_methods = _methods(translational=True)
+    rows = {name: [] for name in [*methods, *patch_methods]}
+    for delta in deltas:
+        block = _build(_p1_block, delta)
+        assembly = block if isinstance(block, InterlockError) else patch(block, PATCH_RADIUS, frame="boundary")
+        truth = delta > 0
+        for name, method in methods.items():
+            rows[name].append(_outcome(method, block, truth, False))
+        for name, method in patch_methods.items():
+            rows[name].append(_outcome(method, assembly, truth, name.startswith("certify")))
+    return {"parameter": "delta", "values": list(deltas), "truth": [d > 0 for d in deltas], "rows": rows}
+
+
+# --- family B: a contact face folded by epsilon --------------------------------------------------
+
+
+def _prism_y(ring) -> trimesh.Trimesh:
+    """The solid swept by a counter-clockwise polygon of the (x, z) plane along y from 0 to 1."""
+    ring = np.asarray(ring, dtype=float)
+    n = len(ring)
+    triangles = shapely.get_parts(shapely.constrained_delaunay_triangles(shapely.Polygon(ring)))
+    corners = shapely.get_coordinates(shapely.get_exterior_ring(triangles)).reshape(len(triangles), 4, 2)[:, :3]
+    cap = np.linalg.norm(corners[:, :, None] - ring[None, None], axis=-1).argmin(axis=-1)
+    vertices = np.vstack([np.column_stack([ring[:, 0], np.full(n, y), ring[:, 1]]) for y in (0.0, 1.0)])
+    sides = [(k, (k + 1) % n, (k + 1) % n + n) for k in range(n)] + [(k, (k + 1) % n + n, k + n) for k in range(n)]
+    mesh = trimesh.Trimesh(vertices, np.vstack([cap, cap[:, ::-1] + n, sides]), process=False)
+    trimesh.repair.fix_normals(mesh)
+    return mesh
+
+
+def _folded_grid(epsilon: float) -> Assembly:
+    """Ex. 3.5's 3 x 3 cube grid whose middle cube's +x face is a ridge, each half tilted by ``epsilon``."""
+    ridge = 0.5 * math.tan(epsilon)
+    middle = _prism_y([(0, 0), (1, 0), (1 + ridge, 0.5), (1, 1), (0, 1)])
+    right = _prism_y([(1, 0), (2, 0), (2, 1), (1, 1), (1 + ridge, 0.5)])
+    cube = trimesh.creation.box(bounds=[[0, 0, 0], [1, 1, 1]])
+    types, transforms = [], []
+    for i in range(3):
+        for j in range(3):
+            kind = {(1, 1): 1, (1, 2): 2}.get((i, j), 0)
+            shift = np.eye(4)
+            if kind == 0:
+                shift[:3, 3] = (j - 1, i - 1, 0)
+            types.append(kind)
+            transforms.append(shift)
+    return Assembly([cube, middle, right], types, transforms, frame=[0, 1, 2, 3, 5, 6, 7, 8],
+                    info={"fold": epsilon})
+
+
+def _family_b(epsilons) -> dict:
+    methods = _methods(translational=False)
+    rows = {name: [] for name in methods}
+    for epsilon in epsilons:
+        assembly = _build(_folded_grid, epsilon)
+        for name, method in methods.items():
+            rows[name].append(_outcome(method, assembly, epsilon > 0, name.startswith("certify")))
+    return {"parameter": "epsilon", "values": list(epsilons), "truth": [e > 0 for e in epsilons], "rows": rows}
+
+
+# --- family C: units -----------------------------------------------------------------------------
+
+
+def _scaled(assembly: Assembly, s: float) -> Assembly:
+    """The same assembly with every coordinate multiplied by ``s``."""
+    transforms = assembly.transforms.copy()
+    transforms[:, :3, 3] *= s
+    lattice = None if assembly.lattice is None else assembly.lattice * s
+    return Assembly([m.copy().apply_scale(s) for m in assembly.meshes], assembly.types, transforms,
+                    labels=assembly.labels, frame=assembly.frame, lattice=lattice, info=assembly.info)
+
+
+def _p4_block():
+    return escher_block(wallpaper.group("p4"), {0: [(0.25, 0.1)], 1: [(0.4, 0.25)]})
+
+
+def _scale_subjects() -> dict:
+    """name -> (finite assembly, periodic cell, truth): the paper's examples and the README's p4 patch."""
+    block = _p4_block()
+    return {
+        "Ex. 3.6 layer": (presets.interlocking_cubes(), presets.interlocking_cubes_cell(), True),
+        "Ex. 3.5 grid": (presets.cube_grid(), presets.cube_grid_cell(), False),
+        "p4 patch": (patch(block, 1.0, frame="boundary"), periodic_cell(block), True),
+    }
+
+
+def _periodic_cell_method(cell):
+    return _periodic_answer(periodic_check(cell))
+
+
+def _family_c(scales) -> dict:
+    rows, truths = {}, {}
+    for name, (assembly, cell, truth) in _scale_subjects().items():
+        truths[name] = truth
+        runs = {f"{name}: check": (_check_method(), assembly, False),
+                f"{name}: certify=True": (_check_method(certify=True), assembly, True),
+                f"{name}: periodic_check": (_periodic_cell_method, cell, False)}
+        for label, (method, subject, certified_mode) in runs.items():
+            rows[label] = [_outcome(method, _scaled(subject, s), truth, certified_mode) for s in scales]
+    return {"parameter": "scale", "values": list(scales), "truth": truths, "rows": rows}
+
+
+# --- summary, chart --------------------------------------------------------------------------------
+
+
+def _threshold(family: dict, row: str):
+    """The smallest positive parameter at which ``row`` is correct for it and every larger value (None if none)."""
+    best = None
+    for value, outcome in zip(family["values"], family["rows"][row]):
+        if value <= 0:
+            continue
+        if outcome["class"] != "correct":
+            break
+        best = value
+    return best
+
+
+def _summary(family: dict) -> dict:
+    """Per method: its threshold, the classes it gave, and whether it ever answered wrongly."""
+    out = {}
+    for row, outcomes in family["rows"].items():
+        classes = [o["class"] for o in outcomes]
+        out[row] = {"threshold": _threshold(family, row) if family["parameter"] != "scale" else None,
+                    "counts": {c: classes.count(c) for c in CLASSES},
+                    "wrong_at": [v for v, c in zip(family["values"], classes) if c == "wrong"],
+                    "seconds": sum(o["seconds"] for o in outcomes)}
+    return out
+
+
+def run(quick: bool = False) -> dict:
+    deltas = QUICK_DELTAS if quick else DELTAS
+    scales = QUICK_SCALES if quick else SCALES
+    timings = {}
+    families = {}
+    with warnings.catch_warnings():
+        # finite steps intersect blocks that only touch: trimesh divides a zero volume by zero
+        warnings.simplefilter("ignore", RuntimeWarning)
+        for key, build, values in (("A", _family_a, deltas), ("B", _family_b, deltas), ("C", _family_c, scales)):
+            start = time.perf_counter()
+            families[key] = build(values)
+            timings[key] = time.perf_counter() - start
+    summaries = {key: _summary(family) for key, family in families.items()}
+    delta_star = summaries["A"]["check: defaults"]["threshold"]
+    epsilon_star = summaries["B"]["check: defaults"]["threshold"]
+    default_rows = ("check: defaults", "certify=True")
+    never_wrong = {key: all(not summaries[key][row]["wrong_at"] for row in default_rows) for key in ("A", "B")}
+    never_wrong["C"] = all(not s["wrong_at"] for s in summaries["C"].values())
+    for key, family in families.items():
+        for row, info in summaries[key].items():
+            wrong = ", ".join(f"{v:g}" for v in info["wrong_at"]) or "never"
+            limit = "" if info["threshold"] is None else f", correct down to {info['threshold']:g}"
+            print(f"{key} {row:42s}{limit}; wrong at {wrong} ({info['seconds']:.2f} s)")
+    print(f"delta* = {delta_star:g}, epsilon* = {epsilon_star:g}; defaults and certify=True never wrong: {never_wrong}")
+    payload = {"benchmark": "verdicts near degeneracy", "quick": quick, "delta_star": delta_star,
+               "epsilon_star": epsilon_star, "defaults_never_wrong": never_wrong, "families": families,
+               "summary": summaries, "seconds": timings}
+    write_json("degeneracy", payload)
+    _chart(families, delta_star, epsilon_star, never_wrong["A"] and never_wrong["B"])
+    return payload
+
+
+def _chart(families: dict, delta_star, epsilon_star, never_wrong: bool) -> None:
+    plt = pyplot()
+    if plt is None:
+        return
+    from matplotlib.colors import ListedColormap
+    from matplotlib.patches import Patch
+
+    titles = {"A": "A: p1 Escher edge at distance δ from its line (translational; truth: interlocked iff δ > 0)",
+              "B": "B: Ex. 3.5 grid, middle cube's face folded by ε (truth: interlocked iff ε > 0)",
+              "C": "C: coordinates × s (truth: Ex. 3.6 and p4 interlocked, Ex. 3.5 not; for every s)"}
+    heights = [len(f["rows"]) + 2 for f in families.values()]
+    fig, axes = plt.subplots(len(families), 1, figsize=(12, 0.36 * sum(heights) + 1.5),
+                             gridspec_kw={"height_ratios": heights})
+    colours = ListedColormap([COLOURS[c] for c in CLASSES])
+    for ax, (key, family) in zip(axes, families.items()):
+        rows = list(family["rows"])
+        grid = np.array([[CLASSES.index(o["class"]) for o in family["rows"][r]] for r in rows])
+        ax.imshow(grid, cmap=colours, vmin=-0.5, vmax=len(CLASSES) - 0.5, aspect="auto")
+        for (i, j), _ in np.ndenumerate(grid):
+            if family["rows"][rows[i]][j]["certified"]:
+                ax.text(j, i, "c", ha="center", va="center", fontsize=7)
+        ax.set_xticks(range(len(family["values"])), [f"{v:g}" for v in family["values"]], fontsize=7)
+        ax.set_yticks(range(len(rows)), rows, fontsize=7)
+        ax.set_xticks(np.arange(-0.5, len(family["values"])), minor=True)
+        ax.set_yticks(np.arange(-0.5, len(rows)), minor=True)
+        ax.grid(which="minor", color="#666666", linewidth=0.5)
+        ax.tick_params(which="minor", length=0)
+        ax.set_xlabel({"delta": "δ", "epsilon": "ε (radians)", "scale": "s"}[family["parameter"]], fontsize=8)
+        star = {"A": delta_star, "B": epsilon_star}.get(key)
+        if star is not None:
+            ax.axvline(family["values"].index(star) + 0.5, color="black", linewidth=2)
+        ax.set_title(titles[key], fontsize=9, loc="left")
+    axes[-1].legend(handles=[Patch(facecolor=COLOURS[c], edgecolor="#666666", label=c) for c in CLASSES],
+                    loc="upper center", bbox_to_anchor=(0.5, -0.25), ncol=4, fontsize=8)
+    below = "inconclusive below, never wrong" if never_wrong else "SOMETIMES WRONG below"
+    fig.suptitle(f"Verdicts near degeneracy: check with default tolerances is correct for δ ≥ δ* = {delta_star:g} "
+                 f"(ε ≥ {epsilon_star:g}), {below}", fontsize=10, x=0.02, ha="left")
+    save_chart(fig, "degeneracy")
+    plt.close(fig)
+
+
+if __name__ == "__main__":
+    main(run, __doc__)
