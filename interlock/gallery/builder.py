@@ -186,7 +186,8 @@ def _finite_is(interlocked: bool, source: str) -> Claim:
 
 def _no_sliding_iff_criterion() -> Claim:
     return Claim("Prop. 4.6", "the infinite matrix has no kernel (full generic rank) iff Criterion 4.3 holds",
-                 lambda r: (r["periodic"]["generic_rank"] == r["periodic"]["columns"]) == r["criterion_4_3"]["holds"])
+                 lambda r: None if r["criterion_4_3"]["holds"] is None else
+                 (r["periodic"]["generic_rank"] == r["periodic"]["columns"]) == r["criterion_4_3"]["holds"])
 
 
 def _deformation(group, rng) -> dict:
@@ -226,7 +227,8 @@ def _escher(name: str, seed: int, radius: float = 2.0) -> Entry:
     claims = [_finite_not_moving("Cor. 4.8 with the periodic verdict"), _no_sliding_iff_criterion()]
     if name == "p1":
         claims.append(Claim("Thm. 4.7", "translationally interlocked iff Criterion 4.3 holds",
-                            lambda r: None if r["periodic_translational"]["status"] == "inconclusive" else
+                            lambda r: None if r["periodic_translational"]["status"] == "inconclusive"
+                            or r["criterion_4_3"]["holds"] is None else
                             (r["periodic_translational"]["status"] == "interlocked") == r["criterion_4_3"]["holds"]))
     title = f"{name}: Escher block, every deformable edge deformed"
     return Entry(f"escher-{name}", title, "escher", make, tuple(claims), translational=name == "p1")

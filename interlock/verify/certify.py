@@ -8,7 +8,9 @@
   has ``A x >= 0, A x != 0``.
 * "not interlocked" by a sliding motion: an exact rational kernel vector of
   ``A`` (conclusive when the input coordinates are exact binary fractions,
-  e.g. integers or halves), else a finite step.
+  e.g. integers or halves); when the exact matrix has full column rank the
+  slide exists only up to rounding or tolerance and is not certified
+  (without python-flint: finite steps).
 * "not interlocked" by a motion: the blocks moved along the motion by
   growing finite steps must not overlap (manifold3d intersection volume).
 
@@ -50,9 +52,13 @@ def certify_verdict(assembly, A: InterlockingMatrix, verdict):
         return dataclasses.replace(verdict, certified=ok, status=f"{verdict.status}; {note}")
     if flint is not None:
         M = _fmpq_mat(flint, A.matrix)
-        if verdict.motion_kind == "sliding" and _nullspace(flint, M):
-            return dataclasses.replace(verdict, certified=True,
-                                       status=f"{verdict.status}; exact rational kernel vector of A")
+        if verdict.motion_kind == "sliding":
+            if _nullspace(flint, M):
+                return dataclasses.replace(verdict, certified=True,
+                                           status=f"{verdict.status}; exact rational kernel vector of A")
+            # finite steps cannot tell a true slide from one across faces bent below the tolerances
+            return _uncertified(verdict, "not certified: the exact matrix has full column rank, so the sliding "
+                                         "motion exists only up to rounding or tolerance")
         if verdict.motion_kind == "opening" and _exact_opening_motion(flint, M, A, verdict):
             return dataclasses.replace(verdict, certified=True, status=(
                 f"{verdict.status}; exact rational x with A x >= 0, A x != 0 on the LP's active face"))

@@ -4,18 +4,21 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
 import shapely
 
 from interlock.blocks.escher import DEFORMATION_RTOL, Block
 from interlock.errors import InterlockError
 from interlock.wallpaper import GroupElement, WallpaperGroup
 
-__all__ = ["CriterionResult", "criterion_4_3", "MAX_FINITE_ORDER", "UNION_RTOL"]
+__all__ = ["CriterionResult", "criterion_4_3", "MAX_FINITE_ORDER", "UNION_RTOL", "ROUNDING_ULPS"]
 
 #: Finite subgroups of a plane crystallographic group have at most 12 elements (p6m's point group).
 MAX_FINITE_ORDER = 12
 #: The unions of h(F) and h(F') agree when their symmetric difference is below this times the cell area.
 UNION_RTOL = 1e-9
+#: Offsets of an intermediate point from its edge's line up to this many units in the last place are rounding.
+ROUNDING_ULPS = 8
 
 
 @dataclass(frozen=True)
@@ -24,8 +27,9 @@ class CriterionResult:
 
     Attributes
     ----------
-    holds : bool
-        True when no finite set of tiles is bounded by undeformed edges only.
+    holds : bool or None
+        True when no finite set of tiles is bounded by undeformed edges only;
+        None when that depends on ``uncertain_edges``.
     group : str
     deformed_edges : tuple of int
     generators : tuple of GroupElement
@@ -36,16 +40,24 @@ class CriterionResult:
         For a block that fails: the area of the symmetric difference of
         ``U h(F)`` and ``U h(F')`` over ``h`` in ``H`` (about 0: the blocks of
         ``H`` can be lifted together).
+    uncertain_edges : tuple of int
+        Edges whose intermediate points are off the edge's line by more than
+        rounding but not more than the generator's tolerance: floating point
+        cannot say whether they are deformed.
     """
 
-    holds: bool
+    holds: bool | None
     group: str
     deformed_edges: tuple[int, ...]
     generators: tuple[GroupElement, ...]
     witness: tuple[GroupElement, ...] | None = None
     union_difference: float | None = None
+    uncertain_edges: tuple[int, ...] = ()
 
     def __str__(self) -> str:
+        if self.holds is None:
+            return (f"Criterion 4.3 is inconclusive for {self.group}: it holds if edges {list(self.uncertain_edges)} "
+                    "count as deformed and fails if not, and their points lie within the tolerance of the edge")
         if self.holds:
             return f"Criterion 4.3 holds for {self.group} with deformed edges {list(self.deformed_edges)}"
         return (f"Criterion 4.3 fails for {self.group} with deformed edges {list(self.deformed_edges)}: the "
@@ -59,6 +71,7 @@ class CriterionResult:
             "generators": [str(g) for g in self.generators],
             "witness": None if self.witness is None else [str(h) for h in self.witness],
             "union_difference": self.union_difference,
+            "uncertain_edges": list(self.uncertain_edges),
         }
 
 
@@ -102,7 +115,9 @@ def criterion_4_3(block_or_group, deformed_edges=None) -> CriterionResult:
         block, group = block_or_group, block_or_group.group
         if deformed_edges is not None:
             raise InterlockError("give deformed_edges only with a group; a block knows its deformed edges")
-        edges = _geometrically_deformed(block)
+        edges, uncertain = _geometrically_deformed(block)
+        if uncertain and _decide(group, edges | uncertain) != _decide(group, edges):
+            return CriterionResult(None, group.name, tuple(sorted(edges)), (), uncertain_edges=tuple(sorted(uncertain)))
     elif isinstance(block_or_group, WallpaperGroup):
         block, group = None, block_or_group
         edges = _edges(group, deformed_edges)
@@ -122,6 +137,13 @@ def criterion_4_3(block_or_group, deformed_edges=None) -> CriterionResult:
         if difference > UNION_RTOL * group.cell_area:
             raise AssertionError(f"{group.name}: the witness H does not satisfy H(F) = H(F') (difference {difference})")
     return CriterionResult(False, group.name, tuple(sorted(edges)), generators, closure, difference)
+
+
+def _decide(group, edges) -> bool:
+    """Whether Criterion 4.3 holds with these deformed edges (partners added)."""
+    pairings = group.side_pairings()
+    edges = edges | {pairings[e].partner for e in edges}
+    return _closure(group.identity, tuple(dict.fromkeys(pairings[e].element for e in sorted(edges)))) is None
 
 
 def _closure(identity, generators):
@@ -144,20 +166,28 @@ def _closure(identity, generators):
     return tuple(elements)
 
 
-def _geometrically_deformed(block) -> set[int]:
-    """Edges with an intermediate point off the edge's line (points on it leave F' = F there)."""
+def _geometrically_deformed(block) -> tuple[set[int], set[int]]:
+    """Edges with an intermediate point off the edge's line, and edges whose points are off it only within tolerance.
+
+    A point farther than the generator's tolerance deforms its edge; one
+    within rounding (:data:`ROUNDING_ULPS`) lies on the line; in between,
+    floating point cannot tell.
+    """
     group = block.group
     corners = shapely.get_coordinates(group.fundamental_domain().exterior)[:-1]
     tol = DEFORMATION_RTOL * group.cell_area ** 0.5
-    deformed = set()
+    rounding = ROUNDING_ULPS * np.finfo(float).eps * float(np.abs(corners).max())
+    deformed, uncertain = set(), set()
     for e, points in block.deformation.items():
         if len(points):
             p, q = corners[e], corners[(e + 1) % len(corners)]
             direction = (q - p) / ((q - p) @ (q - p)) ** 0.5
-            offsets = (points - p) @ [-direction[1], direction[0]]
-            if abs(offsets).max() > tol:
+            offset = float(np.abs((points - p) @ [-direction[1], direction[0]]).max())
+            if offset > tol:
                 deformed.add(int(e))
-    return deformed
+            elif offset > rounding:
+                uncertain.add(int(e))
+    return deformed, uncertain - deformed
 
 
 def _images(group, polygon, elements):

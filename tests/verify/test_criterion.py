@@ -76,3 +76,20 @@ def test_bad_input():
     block = escher_block(wallpaper.group("p4"), {})
     with pytest.raises(InterlockError, match="give deformed_edges only with a group"):
         criterion_4_3(block, [0])
+
+
+def _p1_block_near_its_line(delta):
+    group = wallpaper.group("p1")
+    p, q = np.asarray(group.fundamental_domain().exterior.coords)[:2]
+    along = (q - p) / np.linalg.norm(q - p)
+    return escher_block(group, {0: [p + 0.4 * (q - p) + delta * np.array([along[1], -along[0]])]})
+
+
+@pytest.mark.parametrize("delta,holds", [(1e-3, True), (1e-9, True), (1e-10, None), (1e-13, None), (0.0, False)])
+def test_points_within_the_tolerance_of_their_line_make_the_criterion_inconclusive(delta, holds):
+    # between rounding and the generator's tolerance floating point cannot say whether the edge is deformed
+    result = criterion_4_3(_p1_block_near_its_line(delta))
+    assert result.holds is holds
+    if holds is None:
+        assert result.uncertain_edges == (0, 2) and "inconclusive" in str(result)
+        assert result.to_dict()["uncertain_edges"] == [0, 2]

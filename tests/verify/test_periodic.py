@@ -195,3 +195,35 @@ def test_float_data_that_breaks_exact_dependencies_is_reported_not_certified():
     # rounding sqrt(3) geometry to floats makes some stress rows exactly independent: say so, claim nothing
     v = periodic_check(CELLS["rhomblock (1,1,0) v1"], certify=True)
     assert v.status == "interlocked" and not v.certified and "not certified: no exact positive stress" in v.reason
+
+
+def _p1_cell_near_its_line(delta):
+    group = wallpaper.group("p1")
+    p, q = np.asarray(group.fundamental_domain().exterior.coords)[:2]
+    along = (q - p) / np.linalg.norm(q - p)
+    return periodic_cell(escher_block(group, {0: [p + 0.4 * (q - p) + delta * np.array([along[1], -along[0]])]}))
+
+
+@pytest.mark.parametrize("delta,status", [(1e-2, "interlocked"), (1e-4, "interlocked"), (1e-6, "inconclusive"),
+                                          (1e-11, "inconclusive"), (0.0, "not interlocked")])
+def test_a_slide_across_faces_bent_below_the_tolerance_is_inconclusive_not_a_motion(delta, status):
+    # Thm. 4.7: interlocked for every delta > 0; below the contact tolerance the bent side face is merged into
+    # one plane and a cell seems to slide across it: the verdict must say so instead of answering wrongly
+    v = periodic_check(_p1_cell_near_its_line(delta), translational=True, certify=True)
+    assert v.status == status
+    if status == "inconclusive":
+        assert "planar only within the contact tolerances" in v.reason and v.motion is None and not v.certified
+    else:
+        assert v.certified
+
+
+def test_a_sliding_motion_the_exact_matrix_does_not_have_is_not_certified():
+    from interlock.verify.contacts import contacts as find
+
+    block = _p1_cell_near_its_line(1e-10)
+    finite = patch(escher_block(wallpaper.group("p1"), {0: [block.info["deformation"][0][0]]}), 1.0,
+                   frame="boundary")
+    tight = find(finite, rtol=1e-12, angle_tol=1e-12)  # contacts that keep the bend: the slide is rounding only
+    v = check(finite, translational=True, contacts=tight, certify=True)
+    assert v.interlocked is False and v.motion_kind == "sliding"  # rank_rtol 1e-9 calls the bend's value zero
+    assert not v.certified and "exact matrix has full column rank" in v.status
