@@ -104,7 +104,10 @@ def cell_reach(cell: Assembly) -> int:
     1
     """
     lattice = _lattice(cell)
-    coordinates = cell.bounds.reshape(-1, 3) @ np.linalg.pinv(lattice)
+    low, high = cell.bounds[:, 0], cell.bounds[:, 1]
+    pick = np.array(np.meshgrid([0, 1], [0, 1], [0, 1], indexing="ij")).reshape(3, -1).T  # the 8 box corners
+    corners = np.where(pick[None, :, :] == 1, high[:, None, :], low[:, None, :]).reshape(-1, 3)
+    coordinates = corners @ np.linalg.pinv(lattice)  # every corner: under a skew lattice any may be extreme
     extent = float((coordinates.max(axis=0) - coordinates.min(axis=0)).max())
     return int(np.floor(extent + EXTENT_SLACK))
 

@@ -45,3 +45,17 @@ def test_cell_patch_rejects_bad_input():
         cell_patch(presets.cube_grid_cell(), 1.5)
     with pytest.raises(InterlockError, match="whole number"):
         cell_patch(presets.cube_grid_cell(), -1)
+
+
+@pytest.mark.parametrize("counts", [(2, 2, 1), (0, 1, 1), (3, 3, 2), (1, 0, 3)])
+@pytest.mark.parametrize("variant", [0, 1])
+def test_no_translate_beyond_the_reach_touches_the_cell(counts, variant):
+    # under a skew lattice any corner of a block's box may be the extreme one (2,2,1 once lost 4 contacts)
+    from interlock.verify import contacts
+
+    cell = rhomblock_assembly(staircase(counts), variant)
+    reach = cell_reach(cell)
+    wider = cell_patch(cell, reach + 1)  # everything within reach + 1 + reach of the centre
+    k = len(cell)
+    touching = {wider.labels[c.j if c.i < k else c.i][:2] for c in contacts(wider, involving=range(k))}
+    assert max(max(abs(a), abs(b)) for a, b in touching) <= reach

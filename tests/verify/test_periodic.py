@@ -23,7 +23,7 @@ def test_example_3_5_infinite_cube_grid_slides_vertically():
     assert v.moving == (0,)
 
 
-@pytest.mark.parametrize("counts", [(1, 0, 0), (1, 1, 0), (2, 1, 0), (1, 1, 1)])
+@pytest.mark.parametrize("counts", [(1, 0, 0), (1, 1, 0), (2, 1, 0), (1, 1, 1), (2, 2, 1), (1, 2, 2), (0, 1, 2)])
 @pytest.mark.parametrize("variant", [0, 1])
 def test_theorem_4_9_periodic_rhomblock_assemblies_interlock(counts, variant):
     v = periodic_check(rhomblock_assembly(staircase(counts), variant))
@@ -187,8 +187,11 @@ def test_certification_refuses_a_wrong_ending():
     assert not ok and "not of full exact rank" in note
     # a stress step with a weight vector that is not a stress is refused too
     _, z, rows, w = reduction.steps[0]
-    ok, note = certify_reduction(A, [("stress", z, rows, -w)], "cell motion")
+    ok, note = certify_reduction(A, [("stress", z, rows, -w)], "no kernel")
     assert not ok and "no exact positive stress" in note
+    # a cell motion needs no step: the exact common kernel of every A_delta is the proof
+    ok, note = certify_reduction(A, (), "cell motion")
+    assert ok and "exact rational cell motion" in note
 
 
 def test_float_data_that_breaks_exact_dependencies_is_reported_not_certified():
