@@ -1,4 +1,4 @@
-"""Shared benchmark plumbing: repeated timing, machine description, result files."""
+"""Shared benchmark plumbing: repeated timing, machine description, result files, and the naive baseline."""
 
 from __future__ import annotations
 
@@ -10,9 +10,19 @@ import time
 from importlib import metadata
 from pathlib import Path
 
+import networkx as nx
+import numpy as np
+import scipy.optimize
+import scipy.sparse as sp
+
+from interlock.blocks import Assembly
+
 RESULTS = Path(__file__).resolve().parent / "results"
 
 PACKAGES = ("interlock", "numpy", "scipy", "shapely", "trimesh", "spglib")
+#: Threads of the BLAS while a benchmark times (as in ``periodic_check``): on a 2-core machine shared with
+#: one other job, two OpenBLAS threads made the dense rank test of a 241-block patch 8.0 s instead of 0.13 s.
+BLAS_THREADS = 1
 
 
 def median_time(fn, repeats: int = 5) -> float:
@@ -26,6 +36,13 @@ def median_time(fn, repeats: int = 5) -> float:
     return statistics.median(times)
 
 
+def limited_blas():
+    """A context in which the BLAS runs on :data:`BLAS_THREADS` threads."""
+    from threadpoolctl import threadpool_limits
+
+    return threadpool_limits(BLAS_THREADS, "blas")
+
+
 def machine() -> dict:
     versions = {}
     for name in PACKAGES:
@@ -37,8 +54,26 @@ def machine() -> dict:
         "python": platform.python_version(),
         "platform": platform.platform(),
         "cpus": os.cpu_count(),
+        "load_average": load_average(),
+        "blas_threads_default": _blas_threads(),
         "versions": versions,
     }
+
+
+def load_average() -> list[float] | None:
+    """The 1, 5 and 15 minute load averages (other work on a shared machine), or None where unknown."""
+    try:
+        return [round(x, 2) for x in os.getloadavg()]
+    except (AttributeError, OSError):
+        return None
+
+
+def _blas_threads() -> int | None:
+    try:
+        from threadpoolctl import threadpool_info
+    except ImportError:
+        return None
+    return max((pool["num_threads"] for pool in threadpool_info() if pool["user_api"] == "blas"), default=None)
 
 
 def write_json(name: str, payload: dict) -> Path:
@@ -79,3 +114,82 @@ def main(run, doc: str) -> None:
     parser = argparse.ArgumentParser(description=doc)
     parser.add_argument("--quick", action="store_true", help="a small version, for tests")
     run(quick=parser.parse_args().quick)
+
+
+# --- the naive baseline ---------------------------------------------------------------
+# What published solvers do, run in the same process as ``check`` so that ratios mean something on a shared
+# machine: every pair of blocks is a candidate contact, the rank is a dense SVD, and the stress LP carries
+# one inequality row per contact row.
+
+#: The stages of a naive verdict, in order (the interlocking matrix is the same function as ours).
+NAIVE_STAGES = ("contacts", "matrix", "rank", "lp")
+
+
+class AllPairs(Assembly):
+    """The same blocks with every pair a candidate contact, each computed on its own.
+
+    No spatial index (``neighbours`` and ``neighbour_graph`` are the complete
+    graph) and no instancing (every pair is its own kind), so
+    :func:`~interlock.verify.contacts` does what an all-pairs solver does:
+    ``n (n - 1) / 2`` facet matchings.
+    """
+
+    @classmethod
+    def of(cls, assembly: Assembly) -> AllPairs:
+        return cls(assembly.meshes, assembly.types, assembly.transforms, assembly.labels, assembly.frame)
+
+    @property
+    def neighbours(self):
+        return self.neighbour_graph()
+
+    def neighbour_graph(self, rtol: float = 0.0):
+        return nx.complete_graph(len(self))
+
+    def pair_kinds(self, pairs):
+        pairs = np.asarray(pairs, dtype=int).reshape(-1, 2)
+        own = np.arange(len(pairs))
+        return own, own, np.broadcast_to(np.eye(4), (len(pairs), 4, 4))
+
+
+def naive_rank(matrix) -> int:
+    """``numpy.linalg.matrix_rank`` of the dense matrix (an SVD of all of ``A``)."""
+    return int(np.linalg.matrix_rank(matrix.toarray()))
+
+
+def naive_stress(matrix) -> bool:
+    """Whether ``A^T w = 0`` has ``w > 0``: maximise ``t`` subject to ``w_i >= t``, ``t <= 1`` (HiGHS).
+
+    The form of published solvers: the auxiliary ``t`` and one inequality
+    row ``t - w_i <= 0`` (with its slack) per row of ``A``; a positive stress
+    exists iff the optimum is ``t = 1``.
+    """
+    m, n = matrix.shape
+    objective = np.zeros(m + 1)
+    objective[-1] = -1.0
+    equalities = sp.hstack([matrix.T, sp.csr_matrix((n, 1))]).tocsr()
+    inequalities = sp.hstack([-sp.identity(m), np.ones((m, 1))]).tocsr()
+    result = scipy.optimize.linprog(objective, A_ub=inequalities, b_ub=np.zeros(m), A_eq=equalities,
+                                    b_eq=np.zeros(n), bounds=[(None, None)] * m + [(None, 1.0)], method="highs")
+    return result.status == 0 and -result.fun > 0.5
+
+
+def naive_verdict(assembly: Assembly) -> tuple[bool, dict]:
+    """(interlocked, seconds per stage of :data:`NAIVE_STAGES`) of the naive baseline on a fresh copy."""
+    from interlock.verify import contacts
+    from interlock.verify.matrix import interlocking_matrix
+
+    everything = AllPairs.of(assembly)
+    seconds = {}
+    start = time.perf_counter()
+    found = contacts(everything)
+    seconds["contacts"] = time.perf_counter() - start
+    start = time.perf_counter()
+    A = interlocking_matrix(everything, contacts=found)
+    seconds["matrix"] = time.perf_counter() - start
+    start = time.perf_counter()
+    full_rank = naive_rank(A.matrix) == A.shape[1]
+    seconds["rank"] = time.perf_counter() - start
+    start = time.perf_counter()
+    stress = naive_stress(A.matrix)
+    seconds["lp"] = time.perf_counter() - start
+    return full_rank and stress, seconds

@@ -1,0 +1,439 @@
+"""Scaling: time and peak memory of each stage against the number of blocks, with a naive baseline in the same run.
+
+Two families of assemblies, each with its outer ring fixed (main paper Cor. 4.8):
+
+- ``rhomblock``: RhomBlocks (variant 0) on a uniformly random n x n x n hexagon
+  (seed 0), ``3 n^2`` blocks, n = 5, 10, 15, 20, 30, 40 (75 to 4,800 blocks);
+- ``escher``: patches of radius r = 2 ... 12 of a p4 Escher block with edges 0
+  and 1 deformed (69 to 1,901 blocks).
+
+Each size runs the whole pipeline several times and times every stage on its
+own: ``generation`` (``random_hexagon`` + ``rhomblock_assembly``, or
+``escher_block`` + ``patch``), ``contacts``, ``matrix``, ``rank`` and ``lp``
+(the stress LP, Clarabel in feasibility form) — these four from
+``check(assembly, validate=False).timings`` — and ``export`` (binary STL);
+``verdict`` is contacts through lp.  The BLAS runs on one thread
+(:data:`benchmarks.common.BLAS_THREADS`), for ours and the baseline alike.
+Every run generates a new assembly, so nothing is cached between runs.  Up to
+5 runs per size, fewer for big sizes (no further run once the runs of a size
+would pass 40 s; :data:`FULL`); each row records its number of runs, and the
+medians are reported.
+
+The naive baseline (:func:`benchmarks.common.naive_verdict`) runs in the same
+process on the same assemblies: contacts over all pairs of blocks without
+instancing, the same matrix, ``numpy.linalg.matrix_rank`` of the dense matrix,
+and HiGHS on ``max t : A^T w = 0, w_i >= t, t <= 1``.  It grows with the
+sizes until one naive verdict takes more than 60 s, or would take more than
+twice that by a cubic extrapolation (the dense rank); rows then say why it was
+skipped.  ``ours_over_naive`` holds the ratios of the medians
+(below 1: ours is faster).
+
+Peak memory comes from one fresh interpreter per size (with ``quick``, for the
+largest size of each family only), run after all timings, two at a time: per
+stage, the peak resident set above the resident set at the stage's start
+(Linux: ``VmHWM`` after resetting it through ``/proc/self/clear_refs``), and
+the peak of the whole pipeline above the resident set after imports, in MB
+(10^6 bytes).  ``dense_A_mb`` is what a dense copy of ``A`` takes, which the
+naive rank needs.
+
+Growth exponents are least-squares slopes of log(seconds) against log(blocks)
+over the sizes where a stage takes more than :data:`FIT_FLOOR` seconds (of
+log(MB) over the sizes above :data:`MEMORY_FIT_FLOOR` MB for memory).
+
+Reading the chart: one log-log panel of seconds against blocks per family,
+one line per stage (ours solid, naive dashed, the verdict in black), the
+exponent ``~N^k`` in each legend entry; a line that is steeper grows faster,
+and the vertical gap between a dashed and a solid line of one colour is the
+speed-up.  The right panel shows the peak memory of the whole pipeline and of
+its heaviest stages, and what a dense ``A`` would take.
+"""
+
+from __future__ import annotations
+
+import json
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+
+from benchmarks.common import (BLAS_THREADS, limited_blas, load_average, main, naive_verdict, pyplot, save_chart,
+                               write_json)
+from interlock import wallpaper
+from interlock.blocks import Assembly, escher_block, patch, random_hexagon, rhomblock_assembly
+from interlock.gallery import export
+from interlock.verify import check
+
+ROOT = Path(__file__).resolve().parents[1]
+#: The stages of one pipeline run, in order.
+STAGES = ("generation", "contacts", "matrix", "rank", "lp", "export")
+#: The stages of ``check`` that make up a verdict (validation is off).
+VERDICT = ("contacts", "matrix", "rank", "lp")
+
+
+@dataclass(frozen=True)
+class Policy:
+    """How long to measure.
+
+    At most ``runs`` runs per size, and no further run of ours (of the naive
+    baseline) once the runs so far plus one more would pass ``run_budget``
+    (``naive_budget``) seconds; the naive baseline stops growing once one of
+    its verdicts takes longer than ``naive_limit`` seconds.
+    """
+
+    runs: int
+    run_budget: float
+    naive_budget: float
+    naive_limit: float
+
+
+FULL = Policy(runs=5, run_budget=40.0, naive_budget=30.0, naive_limit=60.0)
+QUICK = Policy(runs=3, run_budget=1.0, naive_budget=1.0, naive_limit=2.0)
+
+#: Exponents are fitted over the sizes where a stage takes longer than this (seconds) ...
+FIT_FLOOR = 0.005
+#: ... and where the pipeline's peak memory is above this (MB; a first pipeline costs about 8 MB whatever its size).
+MEMORY_FIT_FLOOR = 10.0
+#: The deformation of the p4 Escher block: edge -> points.
+ESCHER_DEFORMATION = {0: [(0.25, 0.1)], 1: [(0.4, 0.25)]}
+MB = 1e6
+
+
+def rhomblocks(n: int):
+    """RhomBlocks on a random n x n x n hexagon (seed 0), outer ring fixed: ``3 n^2`` blocks."""
+    return rhomblock_assembly(random_hexagon(n, n, n, seed=0), 0, frame="boundary")
+
+
+def escher_patch(radius: float):
+    """A patch of radius ``radius`` of the p4 Escher block, outer ring fixed."""
+    return patch(escher_block(wallpaper.group("p4"), ESCHER_DEFORMATION), radius, frame="boundary")
+
+
+@dataclass(frozen=True)
+class Family:
+    """Assemblies of growing size: ``generate(size)`` for each of ``sizes`` (``quick_sizes`` for tests)."""
+
+    name: str
+    generate: Callable[[object], Assembly]
+    size_name: str
+    description: str
+    sizes: tuple
+    quick_sizes: tuple
+
+
+FAMILIES = (
+    Family("rhomblock", rhomblocks, "n", "RhomBlocks on a random n x n x n hexagon, ring fixed",
+           (5, 10, 15, 20, 30, 40), (3, 5, 8)),
+    Family("escher", escher_patch, "radius", "patch of a p4 Escher block (edges 0, 1 deformed), ring fixed",
+           (2, 3, 4, 6, 9, 12), (1, 2)),
+)
+
+
+def run(quick: bool = False) -> dict:
+    policy = QUICK if quick else FULL
+    start, load = time.perf_counter(), load_average()
+    with tempfile.TemporaryDirectory() as folder, limited_blas():
+        _warm_up(Path(folder))
+        families = {family.name: _time_family(family, family.quick_sizes if quick else family.sizes, policy,
+                                                   Path(folder))
+                    for family in FAMILIES}
+    # quick: only the largest size of each family (a fresh interpreter costs about a second of imports)
+    jobs = [(name, row["size"]) for name, rows in families.items() for row in (rows[-1:] if quick else rows)]
+    for (name, size), memory in zip(jobs, _peak_memories(jobs)):
+        row = next(r for r in families[name] if r["size"] == size)
+        row["memory_mb"] = memory
+    payload = {
+        "benchmark": "scaling",
+        "quick": quick,
+        "policy": {**asdict(policy), "fit_floor_seconds": FIT_FLOOR, "memory_fit_floor_mb": MEMORY_FIT_FLOOR,
+                   "blas_threads": BLAS_THREADS},
+        "load_average_at_start": load,
+        "families": {family.name: {"description": family.description, "size": family.size_name,
+                                   "rows": families[family.name], "exponents": _exponents(families[family.name])}
+                     for family in FAMILIES},
+    }
+    payload["seconds"] = time.perf_counter() - start
+    for name, family in payload["families"].items():
+        print(f"{name} exponents: " + "; ".join(
+            who + " " + ", ".join(f"{k} {v:.2f}" for k, v in family["exponents"][who].items() if v is not None)
+            for who in ("ours", "naive")))
+    print(f"scaling ({'quick' if quick else 'full'}): {payload['seconds']:.0f} s")
+    write_json("scaling", payload)
+    _chart(payload)
+    return payload
+
+
+# --- timings -------------------------------------------------------------------
+
+
+def _warm_up(folder: Path) -> None:
+    """One small pipeline and naive verdict first, so that no size pays for first calls (imports, BLAS threads)."""
+    _pipeline(FAMILIES[0], FAMILIES[0].quick_sizes[0], folder)
+    naive_verdict(FAMILIES[0].generate(FAMILIES[0].quick_sizes[0]))
+
+
+def _pipeline(family: Family, size, folder: Path):
+    """One run: (seconds per stage and for the verdict, the assembly, its verdict)."""
+    seconds = {}
+    start = time.perf_counter()
+    assembly = family.generate(size)
+    seconds["generation"] = time.perf_counter() - start
+    verdict = check(assembly, validate=False)
+    seconds.update({stage: verdict.timings[stage] for stage in VERDICT})
+    start = time.perf_counter()
+    export(assembly, folder / "scaling.stl")
+    seconds["export"] = time.perf_counter() - start
+    seconds["verdict"] = sum(seconds[stage] for stage in VERDICT)
+    return seconds, assembly, verdict
+
+
+def _repeat(fn, runs: int, budget: float) -> list:
+    """The results of up to ``runs`` calls of ``fn``, stopping before a call would take the total past ``budget``."""
+    results, spent = [], 0.0
+    while len(results) < runs:
+        start = time.perf_counter()
+        results.append(fn())
+        last = time.perf_counter() - start
+        spent += last
+        if spent + last > budget:
+            break
+    return results
+
+
+def _medians(runs: list[dict]) -> tuple[dict, dict]:
+    """(median per key, every run's value per key) of per-run dictionaries of seconds."""
+    every = {key: [run[key] for run in runs] for key in runs[0]}
+    return {key: statistics.median(values) for key, values in every.items()}, every
+
+
+def _time_family(family: Family, sizes, policy: Policy, folder: Path) -> list[dict]:
+    rows = []
+    for size in sizes:
+        runs = _repeat(lambda: _pipeline(family, size, folder), policy.runs, policy.run_budget)
+        seconds, every = _medians([r[0] for r in runs])
+        _, assembly, verdict = runs[-1]
+        row = {"size": size, "blocks": len(assembly), "shape": list(verdict.shape), "contacts": verdict.contacts,
+               "interlocked": verdict.interlocked, "dense_A_mb": verdict.shape[0] * verdict.shape[1] * 8 / MB,
+               "runs": len(runs), "seconds": seconds, "run_seconds": every, "memory_mb": None}
+        skip = _naive_skip(rows, row["blocks"], policy.naive_limit)
+        row["naive"] = {"skipped": skip} if skip else _naive(assembly, verdict, seconds, policy)
+        rows.append(row)
+        _print_row(family, row)
+    return rows
+
+
+def _naive(assembly, verdict, ours: dict, policy: Policy) -> dict:
+    """The naive baseline's medians on ``assembly``, and our medians over them."""
+    runs = _repeat(lambda: naive_verdict(assembly), policy.runs, policy.naive_budget)
+    per_run = [dict(seconds, verdict=sum(seconds.values())) for _, seconds in runs]
+    seconds, every = _medians(per_run)
+    interlocked = runs[0][0]
+    return {"runs": len(runs), "seconds": seconds, "run_seconds": every, "interlocked": interlocked,
+            "agrees": interlocked == verdict.interlocked,
+            "ours_over_naive": {stage: ours[stage] / seconds[stage] for stage in ("contacts", "rank", "lp", "verdict")}}
+
+
+def _naive_skip(rows: list[dict], blocks: int, limit: float) -> str | None:
+    """Why the naive baseline does not run at ``blocks`` (after ``rows``), or None when it does."""
+    done = [row for row in rows if "seconds" in row["naive"]]
+    if not done:
+        return None
+    last = done[-1]
+    slowest = max(last["naive"]["run_seconds"]["verdict"])
+    if slowest > limit:
+        return f"stopped: a naive verdict took {slowest:.0f} s at {last['blocks']} blocks (limit {limit:.0f} s)"
+    predicted = last["naive"]["seconds"]["verdict"] * (blocks / last["blocks"]) ** 3
+    if predicted > 2 * limit:
+        return f"skipped: predicted {predicted:.0f} s (cubic from {last['blocks']} blocks; limit {limit:.0f} s)"
+    return None
+
+
+def _print_row(family: Family, row: dict) -> None:
+    s = row["seconds"]
+    line = (f"{family.name} {family.size_name}={row['size']} ({row['blocks']} blocks, A {row['shape'][0]}x"
+            f"{row['shape'][1]}): verdict {s['verdict']:.3f} s [" + ", ".join(f"{k} {s[k]:.3f}" for k in STAGES)
+            + f"] ({row['runs']} runs)")
+    naive = row["naive"]
+    if "seconds" in naive:
+        line += (f"; naive {naive['seconds']['verdict']:.3f} s ({naive['runs']} runs, x"
+                 f"{1 / naive['ours_over_naive']['verdict']:.1f}, agrees {naive['agrees']})")
+    else:
+        line += f"; naive {naive['skipped']}"
+    print(line, flush=True)
+
+
+# --- growth exponents --------------------------------------------------------------
+
+
+def _slope(blocks, values, floor: float) -> float | None:
+    """Least-squares slope of log(value) against log(blocks) over values above ``floor`` (None below 2 points)."""
+    points = [(b, v) for b, v in zip(blocks, values) if v is not None and v > floor]
+    if len(points) < 2 or len({b for b, _ in points}) < 2:
+        return None
+    x, y = np.log(np.array(points, dtype=float)).T
+    return float(np.polyfit(x, y, 1)[0])
+
+
+def _exponents(rows: list[dict]) -> dict:
+    blocks = [row["blocks"] for row in rows]
+    naive = [row for row in rows if "seconds" in row["naive"]]
+    memory = [row.get("memory_mb") or {} for row in rows]
+    return {
+        "ours": {stage: _slope(blocks, [row["seconds"][stage] for row in rows], FIT_FLOOR)
+                 for stage in (*STAGES, "verdict")},
+        "naive": {stage: _slope([row["blocks"] for row in naive], [row["naive"]["seconds"][stage] for row in naive],
+                                FIT_FLOOR) for stage in ("contacts", "matrix", "rank", "lp", "verdict")},
+        "peak_memory": _slope(blocks, [m.get("peak") for m in memory], MEMORY_FIT_FLOOR),
+    }
+
+
+# --- peak memory -------------------------------------------------------------------
+
+
+def _peak_memories(jobs: list[tuple[str, object]]) -> list[dict | None]:
+    """Peak memory of each (family, size), each in a fresh interpreter, two at a time."""
+    with ThreadPoolExecutor(max_workers=2) as pool:
+        return list(pool.map(lambda job: _peak_memory(*job), jobs))
+
+
+def _peak_memory(family: str, size) -> dict | None:
+    code = ("import json; from benchmarks.scaling import memory_child; "
+            f"print(json.dumps(memory_child({family!r}, {size!r})))")
+    done = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True)
+    if done.returncode != 0:
+        print(f"peak memory of {family} {size} failed: {done.stderr.strip().splitlines()[-1:]}")
+        return None
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def memory_child(family: str, size) -> dict | None:
+    """Run one pipeline in this (fresh) interpreter: peak MB per stage and of the whole pipeline."""
+    import clarabel  # noqa: F401  (the stress LP imports it on first use; count it in the baseline)
+
+    if not Path("/proc/self/status").exists():
+        return None
+    generate = next(f.generate for f in FAMILIES if f.name == family)
+    with tempfile.TemporaryDirectory() as folder, limited_blas():
+        meter = _PeakMeter()
+        meter.enter("generation")
+        assembly = generate(size)
+        check(assembly, validate=False, progress=meter.enter)
+        meter.enter("export")
+        export(assembly, Path(folder) / "scaling.stl")
+        meter.enter(None)
+    return meter.result()
+
+
+class _PeakMeter:
+    """Peak resident memory of this process per stage (Linux ``/proc``), above the resident set at the stage's start."""
+
+    def __init__(self):
+        self.base = self.top = _proc_status("VmRSS")
+        self.stage, self.start, self.stages = None, 0, {}
+        self.resets = True
+
+    def enter(self, stage: str | None) -> None:
+        """End the current stage and start ``stage`` (None: just end)."""
+        if self.stage is not None:
+            high = _proc_status("VmHWM")
+            self.stages[self.stage] = (high - self.start) / MB
+            self.top = max(self.top, high)
+        self.resets = _reset_peak() and self.resets
+        self.stage, self.start = stage, _proc_status("VmRSS")
+
+    def result(self) -> dict:
+        return {"peak": (self.top - self.base) / MB, **(self.stages if self.resets else {})}
+
+
+def _proc_status(key: str) -> int:
+    """A ``/proc/self/status`` memory entry in bytes."""
+    for line in Path("/proc/self/status").read_text().splitlines():
+        if line.startswith(key + ":"):
+            return int(line.split()[1]) * 1024
+    raise KeyError(key)
+
+
+def _reset_peak() -> bool:
+    """Reset this process's peak resident set to the current one (Linux >= 4.0); whether that worked."""
+    try:
+        Path("/proc/self/clear_refs").write_text("5")
+    except OSError:
+        return False
+    return True
+
+
+# --- chart ----------------------------------------------------------------------------
+
+COLOURS = {"generation": "C0", "contacts": "C1", "matrix": "C2", "rank": "C3", "lp": "C4", "export": "C5",
+           "verdict": "black"}
+
+
+def _label(name: str, exponent: float | None) -> str:
+    return name if exponent is None else f"{name} ~N^{exponent:.2f}"
+
+
+def _chart(payload: dict) -> None:
+    plt = pyplot()
+    if plt is None:
+        return
+    families = payload["families"]
+    fig, axes = plt.subplots(1, len(families) + 1, figsize=(6 * (len(families) + 1), 5.2))
+    for ax, (name, family) in zip(axes, families.items()):
+        _time_panel(ax, family)
+        ax.set_title(family["description"], fontsize=9)
+    _memory_panel(axes[-1], families)
+    save_chart(fig, "scaling")
+    plt.close(fig)
+
+
+def _time_panel(ax, family: dict) -> None:
+    rows = family["rows"]
+    blocks = [row["blocks"] for row in rows]
+    for stage in (*STAGES, "verdict"):
+        ax.loglog(blocks, [row["seconds"][stage] for row in rows], "o-", color=COLOURS[stage], ms=3,
+                  lw=2 if stage == "verdict" else 1.2, label=_label(stage, family["exponents"]["ours"][stage]))
+    naive = [row for row in rows if "seconds" in row["naive"]]
+    for stage in ("contacts", "rank", "lp", "verdict"):
+        ax.loglog([row["blocks"] for row in naive], [row["naive"]["seconds"][stage] for row in naive], "s--",
+                  color=COLOURS[stage], ms=3, label=_label(f"naive {stage}", family["exponents"]["naive"][stage]))
+    _block_ticks(ax, blocks)
+    ax.set_ylabel("seconds (median)")
+    ax.legend(fontsize=6.5, ncol=2, loc="upper left")
+    ax.grid(True, which="major", alpha=0.3)
+
+
+def _block_ticks(ax, blocks) -> None:
+    """The sizes measured as plain numbers on the (log) block axis."""
+    ax.set_xticks(blocks, [f"{b:,}" for b in blocks], fontsize=7, rotation=45)
+    ax.minorticks_off()
+    ax.set_xlabel("blocks")
+
+
+def _memory_panel(ax, families: dict) -> None:
+    for (name, family), marker, style in zip(families.items(), "os^", ("-", ":", "-.")):
+        rows = [row for row in family["rows"] if row.get("memory_mb")]
+        blocks = [row["blocks"] for row in rows]
+        ax.loglog(blocks, [row["memory_mb"]["peak"] for row in rows], marker + style, color="black", ms=4,
+                  label=_label(f"{name}: whole pipeline", family["exponents"]["peak_memory"]))
+        for stage in ("contacts", "rank", "lp"):
+            values = [row["memory_mb"].get(stage) for row in rows]
+            if any(v is not None for v in values):
+                ax.loglog(blocks, values, marker + style, color=COLOURS[stage], ms=3, lw=1, label=f"{name}: {stage}")
+        dense = family["rows"]
+        ax.loglog([row["blocks"] for row in dense], [row["dense_A_mb"] for row in dense], style, color="grey",
+                  lw=1, label=f"{name}: a dense A (naive rank)")
+    _block_ticks(ax, (100, 300, 1000, 3000))
+    ax.set_ylabel("peak memory above the start (MB)")
+    ax.set_title("peak resident memory, one fresh process per size", fontsize=9)
+    ax.legend(fontsize=6.5, loc="upper left")
+    ax.grid(True, which="major", alpha=0.3)
+
+
+if __name__ == "__main__":
+    main(run, __doc__)
