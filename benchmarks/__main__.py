@@ -1,11 +1,22 @@
-"""Run every benchmark: ``python -m benchmarks [--quick]``."""
+"""Run every benchmark: ``python -m benchmarks [--quick] [--results DIR]``.
+
+Each module writes ``<name>.json`` (machine, versions, medians, ratios) and
+``<name>.png`` into ``benchmarks/results`` (or DIR).
+"""
 
 import argparse
+import time
 
-from benchmarks import gallery, periodic, rhomblock, verify, wallpaper
+from benchmarks import accuracy, degeneracy, gallery, periodic, rhomblock, scaling, verify, wallpaper
+from benchmarks.common import add_arguments, use_results_folder
+
+MODULES = (wallpaper, rhomblock, verify, scaling, periodic, accuracy, degeneracy, gallery)
 
 parser = argparse.ArgumentParser(prog="python -m benchmarks", description="Run every benchmark.")
-parser.add_argument("--quick", action="store_true", help="a small version, for tests")
+add_arguments(parser)
 args = parser.parse_args()
-for module in (wallpaper, rhomblock, verify, periodic, gallery):
+use_results_folder(args.results)
+for module in MODULES:
+    start = time.perf_counter()
     module.run(quick=args.quick)
+    print(f"-- {module.__name__} in {time.perf_counter() - start:.1f} s")

@@ -18,6 +18,15 @@ import scipy.sparse as sp
 from interlock.blocks import Assembly
 
 RESULTS = Path(__file__).resolve().parent / "results"
+#: Environment variable naming another folder for results (``--results DIR``): quick runs in tests write there.
+RESULTS_VARIABLE = "INTERLOCK_BENCHMARK_RESULTS"
+
+
+def results_folder() -> Path:
+    """Where JSON and charts go: ``$INTERLOCK_BENCHMARK_RESULTS`` if set, else ``benchmarks/results``."""
+    folder = Path(os.environ.get(RESULTS_VARIABLE) or RESULTS)
+    folder.mkdir(parents=True, exist_ok=True)
+    return folder
 
 PACKAGES = ("interlock", "numpy", "scipy", "shapely", "trimesh", "spglib")
 #: Threads of the BLAS while a benchmark times (as in ``periodic_check``): on a 2-core machine shared with
@@ -77,8 +86,7 @@ def _blas_threads() -> int | None:
 
 
 def write_json(name: str, payload: dict) -> Path:
-    RESULTS.mkdir(parents=True, exist_ok=True)
-    path = RESULTS / f"{name}.json"
+    path = results_folder() / f"{name}.json"
     path.write_text(json.dumps({"machine": machine(), **payload}, indent=2))
     print(f"wrote {path}")
     return path
@@ -99,8 +107,7 @@ def pyplot():
 
 def save_chart(fig, name: str) -> Path:
     """Write ``benchmarks/results/<name>.png`` and close the figure."""
-    RESULTS.mkdir(parents=True, exist_ok=True)
-    path = RESULTS / f"{name}.png"
+    path = results_folder() / f"{name}.png"
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     fig.clf()
@@ -112,8 +119,20 @@ def main(run, doc: str) -> None:
     import argparse
 
     parser = argparse.ArgumentParser(description=doc)
+    add_arguments(parser)
+    args = parser.parse_args()
+    use_results_folder(args.results)
+    run(quick=args.quick)
+
+
+def add_arguments(parser) -> None:
     parser.add_argument("--quick", action="store_true", help="a small version, for tests")
-    run(quick=parser.parse_args().quick)
+    parser.add_argument("--results", metavar="DIR", help="write JSON and charts here instead of benchmarks/results")
+
+
+def use_results_folder(folder) -> None:
+    if folder is not None:
+        os.environ[RESULTS_VARIABLE] = str(Path(folder).resolve())
 
 
 # --- the naive baseline ---------------------------------------------------------------

@@ -16,6 +16,8 @@ How the stages grow with the number of blocks is ``benchmarks/scaling.py``.
 
 from __future__ import annotations
 
+import os
+
 import statistics
 import time
 from pathlib import Path
@@ -25,7 +27,8 @@ from benchmarks.common import (BLAS_THREADS, NAIVE_STAGES, limited_blas, main, n
 from interlock.blocks import Assembly
 from interlock.verify import check
 
-BUNNY = Path(__file__).resolve().parents[2] / "shared" / "data" / "topolite" / "bunny"
+BUNNY = Path(os.environ.get("INTERLOCK_SHARED_DATA") or Path(__file__).resolve().parents[2] / "shared" / "data") \
+    / "topolite" / "bunny"
 BUNNY_PARTS = 80
 FRAME = (0, 1)
 #: The stages drawn, in order (validation only in the validated run).
