@@ -88,15 +88,21 @@ def _stress_certificate(flint, matrix, w: np.ndarray):
                   "and an exactly invertible row basis")
 
 
-def _nullspace(flint, M) -> list[list]:
-    """An exact basis of ``{x : M x = 0}`` (rational columns as lists), from the reduced row echelon form."""
+def _rref(M):
+    """The reduced row echelon form of an exact matrix and its pivot columns."""
     reduced, rank = M.rref()
-    n = M.ncols()
     pivots, row = [], 0
-    for col in range(n):
+    for col in range(M.ncols()):
         if row < rank and reduced[row, col] != 0:
             pivots.append(col)
             row += 1
+    return reduced, pivots
+
+
+def _nullspace(flint, M) -> list[list]:
+    """An exact basis of ``{x : M x = 0}`` (rational columns as lists), from the reduced row echelon form."""
+    reduced, pivots = _rref(M)
+    n = M.ncols()
     basis = []
     for free in (c for c in range(n) if c not in set(pivots)):
         x = [flint.fmpq(0)] * n
@@ -322,13 +328,8 @@ def _positive_kernel_vector(flint, M, w: np.ndarray) -> bool:
     """
     if len(w) == 0 or np.any(w <= 0):
         return False
-    reduced, rank = M.transpose().rref()
+    reduced, pivots = _rref(M.transpose())
     m = M.nrows()
-    pivots, row = [], 0
-    for col in range(m):
-        if row < rank and reduced[row, col] != 0:
-            pivots.append(col)
-            row += 1
     exact = {j: flint.fmpq(*Fraction(float(w[j])).as_integer_ratio()) for j in range(m) if j not in set(pivots)}
     for r, p in enumerate(pivots):
         value = -sum((reduced[r, j] * wj for j, wj in exact.items()), flint.fmpq(0))
