@@ -215,7 +215,7 @@ def _uncertified(verdict, note):
 RANK_POINTS = ((2, 3), (Fraction(3, 2), Fraction(-5, 7)))
 
 
-def certify_reduction(symbol, steps, ending: str, translational: bool = False) -> tuple[bool, str]:
+def certify_reduction(symbol, steps, ending: str) -> tuple[bool, str]:
     """Replay the periodic facial reduction in exact rational arithmetic (DESIGN.md "Periodic reduction").
 
     Every float entry of the symbol ``A(z) = sum A_delta z^delta`` is taken as

@@ -245,7 +245,7 @@ def periodic_check(cell: Assembly, translational: bool = False, seed: int = 0,
     radius, certified = None, False
     if certify and status != "inconclusive" and reduction.ending in ("no kernel", "cell motion"):
         start = time.perf_counter()
-        certified, note = certify_reduction(A, reduction.steps, reduction.ending, translational)
+        certified, note = certify_reduction(A, reduction.steps, reduction.ending)
         reason += f"; {note}"
         timings["certify"] = time.perf_counter() - start
     if status == "inconclusive" or (status == "not interlocked" and motion is None):
