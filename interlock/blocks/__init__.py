@@ -8,6 +8,7 @@
 """
 
 from interlock.blocks.assembly import Assembly, AssemblyError
+from interlock.blocks.compas import load_compas
 from interlock.blocks.escher import Block, DeformationError, escher_block
 from interlock.blocks import presets
 from interlock.blocks.lozenge import Lozenge, LozengeTiling, TilingError, random_hexagon, staircase
@@ -17,4 +18,4 @@ from interlock.blocks.rhomblock import rhomblock, rhomblock_assembly
 __all__ = ["Assembly", "AssemblyError", "Block", "DeformationError", "escher_block", "patch", "periodic_cell",
            "cell_patch", "cell_reach",
            "presets", "Lozenge", "LozengeTiling", "TilingError", "random_hexagon", "staircase", "rhomblock",
-           "rhomblock_assembly"]
+           "rhomblock_assembly", "load_compas"]

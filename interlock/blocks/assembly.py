@@ -123,6 +123,9 @@ class Assembly:
         that is an error asking for one file per block or an OBJ with objects.
         Polygonal faces are triangulated.
         """
+        if isinstance(paths, (str, Path)) and Path(paths).suffix.lower() == ".json":  # COMPAS; frame: node keys
+            from interlock.blocks.compas import load_compas
+            return load_compas(paths, supports=list(frame or ()) or None)
         if isinstance(paths, (str, Path)):
             path = Path(paths)
             bodies = _load_bodies(path)

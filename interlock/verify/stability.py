@@ -1,0 +1,459 @@
+"""Stability under self-weight: rigid-block equilibrium (RBE) as a linear program (CRA paper, Sec. 2.1)."""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from numbers import Real
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.optimize import linprog
+
+from interlock.blocks.assembly import Assembly
+from interlock.errors import InterlockError
+from interlock.verify.contacts import contacts as find_contacts
+
+__all__ = ["StabilityResult", "StabilityError", "rbe", "critical_tilt", "tilted_gravity", "TILT_AXES",
+           "CONES", "DEFAULT_SIDES", "DEFAULT_TILT_STEP", "DEFAULT_TILT_TOL"]
+
+#: Named tilt axes of the CRA paper's Table 2: rotate-x, rotate-y, rotate-xy30 = (sqrt 3, 1, 0).
+TILT_AXES = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "xy30": (math.sqrt(3.0), 1.0, 0.0)}
+#: Linearised friction cones: "paper" circumscribes the Coulomb cone (App. B, faces tangent to it, so it
+#: allows up to 1/cos(pi/sides) more friction between its faces), "inner" is inscribed (conservative).
+CONES = ("paper", "inner")
+#: Sides of the friction pyramid (App. B: eight).
+DEFAULT_SIDES = 8
+#: Coarse step (degrees) of the tilt scan before bisection, and the bisection tolerance (degrees).
+DEFAULT_TILT_STEP = 5.0
+DEFAULT_TILT_TOL = 0.1
+
+
+class StabilityError(InterlockError):
+    """Input that the stability analysis cannot work with."""
+
+
+@dataclass(frozen=True, eq=False)
+class StabilityResult:
+    """The outcome of :func:`rbe`.
+
+    Attributes
+    ----------
+    stable : bool
+        An equilibrium with compressive, friction-admissible contact forces exists (Eqs. (1), (2), (5)).
+    forces : ndarray (s, 3)
+        Per contact vertex ``(f_n, f_u, f_v)`` in the contact's frame ``(normal, basis[0], basis[1])``,
+        acting on block ``j`` (block ``i`` receives the opposite); NaN when unstable.
+    vertex_contact : ndarray of int (s,)
+        The contact (index into ``contacts``) of each row of ``forces``.
+    points : ndarray (s, 3)
+        The contact vertices where the forces act.
+    resultants : ndarray (c, 3)
+        Per contact, the sum of its vertex forces in world coordinates (on block ``j``).
+    centres_of_pressure : ndarray (c, 3)
+        Per contact, ``sum f_n p / sum f_n`` (NaN where ``sum f_n`` is 0).
+    friction_utilisation : float
+        ``max |f_t| / (mu f_n)`` over loaded vertices (0 when nothing slides, inf if friction is
+        needed with ``mu = 0``); NaN when unstable.
+    status : int
+        ``scipy.optimize.linprog`` status (0 solved, 2 infeasible).
+    message : str
+    contacts : tuple of Contact
+    parameters : dict
+        ``mu``, ``cone``, ``sides``, ``density``, ``gravity``, ``frame``.
+    timings : dict
+        Seconds spent on ``contacts``, ``build`` and ``solve``.
+    """
+
+    stable: bool
+    forces: np.ndarray
+    vertex_contact: np.ndarray
+    points: np.ndarray
+    resultants: np.ndarray
+    centres_of_pressure: np.ndarray
+    friction_utilisation: float
+    status: int
+    message: str
+    contacts: tuple = field(repr=False)
+    parameters: dict = field(default_factory=dict)
+    timings: dict = field(default_factory=dict)
+
+    def __str__(self) -> str:
+        verdict = "stable" if self.stable else "unstable"
+        p = self.parameters
+        extra = f", friction utilisation {self.friction_utilisation:.3g}" if self.stable else ""
+        return (f"RBE {verdict} (mu {p.get('mu')}, {p.get('cone')} cone with {p.get('sides')} sides): "
+                f"{len(self.contacts)} contacts, {len(self.forces)} vertex forces{extra}; "
+                f"{sum(self.timings.values()):.3g} s")
+
+    def to_dict(self) -> dict:
+        """JSON-serialisable summary (forces and resultants as lists)."""
+        return {"stable": self.stable, "status": self.status, "message": self.message,
+                "friction_utilisation": _json_float(self.friction_utilisation),
+                "forces": np.nan_to_num(self.forces, nan=0.0).tolist(),
+                "vertex_contact": self.vertex_contact.tolist(),
+                "resultants": np.nan_to_num(self.resultants, nan=0.0).tolist(),
+                "contacts": [(c.i, c.j) for c in self.contacts],
+                "parameters": dict(self.parameters), "timings": dict(self.timings)}
+
+
+def rbe(assembly: Assembly, mu: float, density: float = 1.0, gravity=(0.0, 0.0, -1.0), frame=None,
+        cone: str = "paper", sides: int = DEFAULT_SIDES, contacts=None) -> StabilityResult:
+    """Rigid-block equilibrium: can contact forces carry the self-weight? (CRA paper, Eqs. (1)-(5)).
+
+    Unknowns are forces at the contact-polygon vertices ``c`` in each contact's
+    frame ``(n, u, v)`` (``n`` from block ``i`` to block ``j``): ``f = (f_n, f_u, f_v)``
+    acts on ``j``, ``-f`` on ``i``.  The LP asks for
+
+    - no tension, Eq. (1): ``f_n >= 0``;
+    - equilibrium of every free block ``b``, Eq. (2): ``A_eq f = -p`` with, per
+      vertex, the force ``f_n n + f_u u + f_v v`` and its moment
+      ``(c - x_b) x (f_n n + f_u u + f_v v)`` about the centroid ``x_b``, and
+      ``p_b = (density * volume_b * gravity, 0)`` (weight at the centroid);
+    - the linearised Coulomb cone, Eq. (5) and App. B: ``d_k . (f_u, f_v) <= m f_n``
+      for ``sides`` directions ``d_k = (cos 2 pi k / sides, sin 2 pi k / sides)``,
+      with ``m = mu`` for ``cone="paper"`` (faces tangent to the cone, App. B's
+      ``G`` for eight sides) and ``m = mu cos(pi / sides)`` for ``cone="inner"``
+      (vertices on the cone: never admits more friction than Coulomb).
+
+    ``A_eq`` restricted to the normal components is the transpose of the
+    interlocking matrix (before merging rows), with force and moment rows in
+    the other order.  Frame blocks take any load.  The assembly is stable when
+    the LP is feasible (Whiting et al.: a solution without tension).  Among
+    feasible forces, HiGHS returns one minimising the total normal force
+    ``sum f_n`` (any feasible one if that LP stalls).  The forces then sit on
+    the cone's faces wherever friction helps, so :attr:`StabilityResult.friction_utilisation`
+    (measured against the round Coulomb cone) reaches ``1 / cos(pi / sides)``
+    (1.082 for eight sides) with the "paper" cone.
+
+    Parameters
+    ----------
+    assembly : Assembly
+    mu : float
+        Friction coefficient, ``>= 0``.
+    density : float or array (n,)
+        Weight per volume, ``> 0``; one value, or one per block (loads carried by heavier blocks,
+        e.g. the bridge's 3.51 on nodes 11-15).
+    gravity : array (3,)
+        Gravity direction and magnitude, not zero.
+    frame : iterable of int, optional
+        Fixed blocks; default ``assembly.frame``; at least one.
+    cone : {"paper", "inner"}
+    sides : int
+        Sides of the friction pyramid, ``>= 3`` (``>= 4`` for "paper", which is unbounded with 3).
+    contacts : sequence of Contact, optional
+        Precomputed :func:`~interlock.verify.contacts.contacts`.
+
+    Returns
+    -------
+    StabilityResult
+
+    Raises
+    ------
+    StabilityError
+        Bad ``mu``, ``density``, ``gravity``, ``cone`` or ``sides``; no frame; not an assembly.
+
+    Notes
+    -----
+    One sparse LP with ``3 s`` unknowns, ``6 (free blocks)`` equalities and
+    ``sides * s`` inequalities for ``s`` contact vertices, solved by HiGHS.
+    Lengths are divided by the model size and loads by the total weight.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> cubes = [trimesh.creation.box(bounds=[[0, 0, z], [1, 1, z + 1]]) for z in (0, 1)]
+    >>> stack = Assembly.from_meshes(cubes, frame=[0])
+    >>> rbe(stack, mu=0.5).stable, rbe(stack, mu=0.5, gravity=tilted_gravity("x", 30)).stable
+    (True, False)
+    """
+    system = _System.build(assembly, mu, density, frame, cone, sides, contacts)
+    return system.solve(_gravity(gravity))
+
+
+def tilted_gravity(axis, angle: float, gravity=(0.0, 0.0, -1.0)) -> np.ndarray:
+    """Gravity in the frame of an assembly turned counter-clockwise by ``angle`` degrees about ``axis``.
+
+    Turning the assembly by ``R`` under fixed gravity ``g`` (the paper's tilting
+    test, Table 2) is turning gravity by ``R^T``: ``R(axis, -angle) g``.
+
+    Examples
+    --------
+    >>> tilted_gravity("x", 90).round(12).tolist()
+    [0.0, -1.0, -0.0]
+    """
+    axis = _axis(axis)
+    theta = -math.radians(float(angle))
+    g = np.asarray(gravity, dtype=float)
+    return (g * math.cos(theta) + np.cross(axis, g) * math.sin(theta)
+            + axis * (axis @ g) * (1.0 - math.cos(theta)))
+
+
+def critical_tilt(assembly: Assembly, axis, mu: float, method: str = "rbe", density: float = 1.0,
+                  frame=None, cone: str = "paper", sides: int = DEFAULT_SIDES, step: float = DEFAULT_TILT_STEP,
+                  tol: float = DEFAULT_TILT_TOL, contacts=None) -> float:
+    """The smallest tilt angle (degrees, in [0, 180]) at which the assembly is no longer stable.
+
+    The assembly is turned counter-clockwise about ``axis`` ("x", "y", "xy30" =
+    ``(sqrt 3, 1, 0)`` as in the CRA paper's Table 2, or a horizontal or any
+    3-vector) under gravity ``(0, 0, -1)`` (:func:`tilted_gravity`).  Angles are
+    scanned in steps of ``step`` until the first unstable one, then bisected to
+    ``tol``.  Returns 180 when every scanned angle up to 180 is stable (the
+    paper's "180.0").  The contact system is built once; each angle is one LP.
+
+    Parameters
+    ----------
+    method : {"rbe"}
+        "cra" (coupled rigid-block analysis) is not implemented yet.
+    step, tol : float
+        Scan step and bisection tolerance in degrees; a stable window narrower
+        than ``step`` after the first unstable angle cannot be missed, but an
+        unstable window narrower than ``step`` can.
+
+    Other parameters are those of :func:`rbe`.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> cubes = [trimesh.creation.box(bounds=[[0, 0, z], [1, 1, z + 1]]) for z in (0, 1)]
+    >>> stack = Assembly.from_meshes(cubes, frame=[0])
+    >>> angle = critical_tilt(stack, "x", mu=0.5)
+    >>> abs(angle - math.degrees(math.atan(0.5))) <= 0.1
+    True
+    """
+    if method == "cra":
+        raise StabilityError("method='cra' (coupled rigid-block analysis) is not built yet; use method='rbe'")
+    if method != "rbe":
+        raise StabilityError(f"method must be 'rbe' (or 'cra', not built yet), got {method!r}")
+    step, tol = _positive("step", step), _positive("tol", tol)
+    system = _System.build(assembly, mu, density, frame, cone, sides, contacts)
+    axis = _axis(axis)
+
+    def stable(angle: float) -> bool:
+        return system.feasible(tilted_gravity(axis, angle))
+
+    if not stable(0.0):
+        return 0.0
+    low = 0.0
+    while low < 180.0:
+        high = min(low + step, 180.0)
+        if not stable(high):
+            break
+        low = high
+    else:
+        return 180.0
+    while high - low > tol:
+        middle = 0.5 * (low + high)
+        low, high = (middle, high) if stable(middle) else (low, middle)
+    return round(high, 10)
+
+
+@dataclass(frozen=True, eq=False)
+class _System:
+    """The LP of :func:`rbe` without its right-hand side (which gravity alone sets)."""
+
+    a_eq: sp.csr_matrix
+    a_ub: sp.csr_matrix
+    cost: np.ndarray
+    bounds: np.ndarray
+    weights: np.ndarray
+    arms: np.ndarray
+    free: np.ndarray
+    frames: np.ndarray
+    points: np.ndarray
+    vertex_contact: np.ndarray
+    contacts: tuple
+    parameters: dict
+    timings: dict
+
+    @classmethod
+    def build(cls, assembly, mu, density, frame, cone, sides, contacts) -> _System:
+        if not isinstance(assembly, Assembly):
+            raise StabilityError(f"expected an interlock Assembly, got {type(assembly).__name__}")
+        mu, density = _nonnegative("mu", mu), _densities(density, len(assembly))
+        if cone not in CONES:
+            raise StabilityError(f"cone must be one of {CONES}, got {cone!r}")
+        if isinstance(sides, bool) or not isinstance(sides, (int, np.integer)) or sides < (4 if cone == "paper" else 3):
+            raise StabilityError(f"sides must be an integer >= {4 if cone == 'paper' else 3}, got {sides!r}")
+        fixed = assembly.block_indices(assembly.frame if frame is None else frame, "frame")
+        if not fixed:
+            raise StabilityError("the assembly has no frame: give the fixed blocks (supports) with frame=[...] "
+                                 "or Assembly.with_frame; without supports nothing can carry the weight")
+        started = time.perf_counter()
+        found = find_contacts(assembly) if contacts is None else tuple(contacts)
+        found_at = time.perf_counter()
+        free = np.setdiff1d(np.arange(len(assembly)), fixed)
+        column_of = np.full(len(assembly), -1)
+        column_of[free] = np.arange(len(free))
+        used = tuple(c for c in found if column_of[c.i] >= 0 or column_of[c.j] >= 0)
+        counts = np.array([len(c.vertices) for c in used], dtype=int)
+        vertex_contact = np.repeat(np.arange(len(used)), counts)
+        points = np.vstack([c.vertices for c in used]) if used else np.empty((0, 3))
+        frames = np.array([[c.normal, c.basis[0], c.basis[1]] for c in used]).reshape(-1, 3, 3)[vertex_contact]
+        length = assembly.scale
+        a_eq = _equilibrium_matrix(assembly, used, vertex_contact, points, frames, column_of, length)
+        bound = mu * (math.cos(math.pi / sides) if cone == "inner" else 1.0)
+        a_ub = _friction_matrix(len(points), sides, bound)
+        weights = density[free] * assembly.volumes[free]
+        arms = np.zeros((len(free), 3))  # weight acts at the centroid: no moment about it
+        bounds = np.tile([[0.0, np.inf], [-np.inf, np.inf], [-np.inf, np.inf]], (len(points), 1))
+        cost = np.tile([1.0, 0.0, 0.0], len(points))
+        built = time.perf_counter()
+        uniform = bool(np.all(density == density[0])) if len(density) else True
+        parameters = {"mu": float(mu), "cone": cone, "sides": int(sides),
+                      "density": float(density[0]) if uniform and len(density) else density.tolist(),
+                      "frame": list(fixed)}
+        timings = {"contacts": found_at - started, "build": built - found_at}
+        return cls(a_eq, a_ub, cost, bounds, weights, arms, free, frames, points, vertex_contact, used,
+                   parameters, timings)
+
+    def _linprog(self, gravity: np.ndarray, least_force: bool):
+        """HiGHS on ``A_eq f = -p / W``, ``A_fr f <= 0``, ``f_n >= 0`` (``W``: total weight).
+
+        With ``least_force`` the objective is ``sum f_n``; HiGHS's simplex sometimes stops undecided on
+        it (status 4 on the shelf), so the interior-point method and then the plain feasibility problem
+        (objective 0) are tried next.  Without it, only the feasibility problem is solved.
+        """
+        load = np.outer(self.weights, gravity)
+        total = float(np.abs(load).sum()) or 1.0
+        b_eq = -np.hstack([load, self.arms]).ravel() / total
+        if not self.a_eq.shape[1]:
+            solved = bool(np.allclose(b_eq, 0.0))
+            return None, (0 if solved else 2), ("no contact forces" if solved else "no contacts carry the load"), total
+        attempts = [(self.cost, "highs"), (self.cost, "highs-ipm")] if least_force else []
+        attempts.append((np.zeros_like(self.cost), "highs"))
+        for cost, method in attempts:
+            outcome = linprog(cost, A_ub=self.a_ub, b_ub=np.zeros(self.a_ub.shape[0]), A_eq=self.a_eq, b_eq=b_eq,
+                              bounds=self.bounds, method=method)
+            if outcome.status in (0, 2):
+                return outcome.x, int(outcome.status), str(outcome.message), total
+        raise StabilityError(f"HiGHS did not decide the RBE problem (status {outcome.status}: {outcome.message})")
+
+    def feasible(self, gravity: np.ndarray) -> bool:
+        return self._linprog(gravity, least_force=False)[1] == 0
+
+    def solve(self, gravity: np.ndarray) -> StabilityResult:
+        started = time.perf_counter()
+        x, status, message, total = self._linprog(gravity, least_force=True)
+        timings = {**self.timings, "solve": time.perf_counter() - started}
+        parameters = {**self.parameters, "gravity": gravity.tolist()}
+        stable = status == 0
+        count = len(self.points)
+        if stable and x is not None:
+            forces = x.reshape(-1, 3) * total
+        else:
+            forces = np.full((count, 3), np.nan if not stable else 0.0)
+        world = np.einsum("sk,skd->sd", forces, self.frames)
+        resultants = np.zeros((len(self.contacts), 3))
+        np.add.at(resultants, self.vertex_contact, world)
+        normal_sum = np.zeros(len(self.contacts))
+        np.add.at(normal_sum, self.vertex_contact, forces[:, 0])
+        moments = np.zeros((len(self.contacts), 3))
+        np.add.at(moments, self.vertex_contact, forces[:, :1] * self.points)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            centres = np.where(normal_sum[:, None] > 0, moments / normal_sum[:, None], np.nan)
+        utilisation = _utilisation(forces, self.parameters["mu"]) if stable else math.nan
+        return StabilityResult(stable, forces, self.vertex_contact, self.points, resultants, centres, utilisation,
+                               status, message, self.contacts, parameters, timings)
+
+
+def _equilibrium_matrix(assembly, used, vertex_contact, points, frames, column_of, length) -> sp.csr_matrix:
+    """``A_eq`` (Eq. (2)): rows ``6 k .. 6 k + 5`` = force and moment (over ``length``) on free block ``k``.
+
+    Column ``3 v + a`` is component ``a`` (n, u, v) of vertex ``v``; on block
+    ``j`` it contributes ``(e_a, r_j x e_a)``, on block ``i`` the negative with ``r_i``.
+    """
+    count = len(points)
+    if not count:
+        return sp.csr_matrix((6 * int((column_of >= 0).sum()), 0))
+    i = np.array([c.i for c in used])[vertex_contact]
+    j = np.array([c.j for c in used])[vertex_contact]
+    rows, cols, data = [], [], []
+    for blocks, sign in ((j, 1.0), (i, -1.0)):
+        on = column_of[blocks] >= 0
+        arm = (points[on] - assembly.centroids[blocks[on]]) / length
+        axes = frames[on]  # (m, 3 components, 3 coordinates)
+        values = sign * np.concatenate([axes, np.cross(arm[:, None, :], axes)], axis=2)  # (m, 3, 6)
+        vertex = np.flatnonzero(on)
+        rows.append((6 * column_of[blocks[on]][:, None, None] + np.arange(6)[None, None, :]).repeat(3, axis=1))
+        cols.append(np.broadcast_to((3 * vertex[:, None] + np.arange(3))[:, :, None], values.shape))
+        data.append(values)
+    matrix = sp.csr_matrix((np.concatenate([d.ravel() for d in data]),
+                            (np.concatenate([r.ravel() for r in rows]), np.concatenate([c.ravel() for c in cols]))),
+                           shape=(6 * int((column_of >= 0).sum()), 3 * count))
+    matrix.eliminate_zeros()
+    return matrix
+
+
+def _friction_matrix(count: int, sides: int, bound: float) -> sp.csr_matrix:
+    """``A_fr`` (Eq. (5), App. B): per vertex ``-bound f_n + cos(a_k) f_u + sin(a_k) f_v <= 0``."""
+    angles = 2.0 * math.pi * np.arange(sides) / sides
+    block = np.column_stack([np.full(sides, -bound), np.cos(angles), np.sin(angles)])
+    block[np.abs(block) < 1e-15] = 0.0
+    return sp.kron(sp.eye(count, format="csr"), sp.csr_matrix(block), format="csr")
+
+
+def _utilisation(forces: np.ndarray, mu: float) -> float:
+    tangential = np.hypot(forces[:, 1], forces[:, 2])
+    normal = forces[:, 0]
+    scale = max(float(np.abs(forces).max(initial=0.0)), 1e-300)
+    loaded = tangential > 1e-9 * scale
+    if not loaded.any():
+        return 0.0
+    if mu == 0.0:
+        return math.inf
+    with np.errstate(divide="ignore"):
+        return float(np.max(tangential[loaded] / (mu * normal[loaded])))
+
+
+def _axis(axis) -> np.ndarray:
+    if isinstance(axis, str):
+        if axis not in TILT_AXES:
+            raise StabilityError(f"tilt axis must be one of {tuple(TILT_AXES)} or a 3-vector, got {axis!r}")
+        axis = TILT_AXES[axis]
+    axis = np.asarray(axis, dtype=float)
+    if axis.shape != (3,) or not np.all(np.isfinite(axis)) or not np.linalg.norm(axis) > 0:
+        raise StabilityError(f"tilt axis must be a finite, non-zero 3-vector, got {axis.tolist()}")
+    return axis / np.linalg.norm(axis)
+
+
+def _gravity(gravity) -> np.ndarray:
+    try:
+        g = np.asarray(gravity, dtype=float)
+    except (TypeError, ValueError):
+        raise StabilityError(f"gravity must be a 3-vector of numbers, got {gravity!r}") from None
+    if g.shape != (3,) or not np.all(np.isfinite(g)):
+        raise StabilityError(f"gravity must be a finite 3-vector, got {g.tolist()}")
+    if not np.linalg.norm(g) > 0:
+        raise StabilityError("gravity is zero: give its direction and magnitude, e.g. (0, 0, -1)")
+    return g
+
+
+def _nonnegative(name: str, value) -> float:
+    if isinstance(value, bool) or not isinstance(value, Real) or not math.isfinite(value) or value < 0:
+        raise StabilityError(f"{name} must be a finite number >= 0, got {value!r}")
+    return float(value)
+
+
+def _positive(name: str, value) -> float:
+    if isinstance(value, bool) or not isinstance(value, Real) or not math.isfinite(value) or value <= 0:
+        raise StabilityError(f"{name} must be a finite number > 0, got {value!r}")
+    return float(value)
+
+
+def _densities(density, count: int) -> np.ndarray:
+    if np.ndim(density) == 0:
+        return np.full(count, _positive("density", density))
+    try:
+        values = np.asarray(density, dtype=float)
+    except (TypeError, ValueError):
+        raise StabilityError(f"density must be a number or one number per block, got {density!r}") from None
+    if values.shape != (count,) or not np.all(np.isfinite(values)) or not np.all(values > 0):
+        raise StabilityError(f"density must be > 0 and finite, one value or {count} (one per block); "
+                             f"got shape {values.shape}")
+    return values
+
+
+def _json_float(value: float):
+    return value if math.isfinite(value) else str(value)
