@@ -99,6 +99,25 @@ def _parser() -> argparse.ArgumentParser:
     gallery.add_argument("--seed", type=int, default=0, help="seed of the random deformations and tilings")
     gallery.set_defaults(run=_run_gallery)
 
+    stability = commands.add_parser(
+        "stability", help="does an assembly stand under its own weight with friction (RBE, seed 001)?",
+        description="Rigid-block equilibrium: compression-only forces at the contact vertices, linearised "
+                    "friction cones, self-weight. COMPAS assembly JSON takes its supports as the frame.",
+        epilog="examples:\n  interlock stability type-a.json --mu 0.84\n"
+               "  interlock stability type-c.json --mu 0.2 --tilt-axis xy30 --json",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    stability.add_argument("paths", nargs="+", help="a COMPAS JSON file, or mesh files (one per block)")
+    stability.add_argument("--mu", type=float, required=True, help="friction coefficient")
+    stability.add_argument("--method", default="rbe", choices=("rbe", "cra"), help="rbe (default); cra is not built yet")
+    stability.add_argument("--fixed", default=None, metavar="LIST", help="frame for mesh files, e.g. 0,1")
+    stability.add_argument("--density", type=float, default=1.0, help="density of every block (default 1)")
+    stability.add_argument("--cone", default="paper", choices=("paper", "inner"),
+                           help="paper: the circumscribed octagon; inner: an inscribed one (conservative)")
+    stability.add_argument("--tilt-axis", metavar="AXIS", help="also find the critical tilt about x, y, xy30 or X,Y,Z")
+    stability.add_argument("--json", action="store_true", help="print JSON instead of text")
+    stability.set_defaults(run=_run_stability)
+
     generate = commands.add_parser("generate", help="generate an assembly and write it (format by suffix)")
     kinds = generate.add_subparsers(dest="kind", metavar="KIND", required=True)
     escher = kinds.add_parser(
@@ -246,6 +265,28 @@ def _run_periodic(args) -> int:
         for b in verdict.moving:
             a, c, i = verdict.motion_blocks[b]
             print(f"   ({a:+d}, {c:+d}, {i})", " ".join(f"{x:+.4f}" for x in verdict.motion[b]))
+    return 0
+
+
+def _run_stability(args) -> int:
+    from interlock.blocks import Assembly
+    from interlock.verify import critical_tilt, rbe
+
+    paths = args.paths[0] if len(args.paths) == 1 else args.paths
+    assembly = Assembly.load(paths) if args.fixed is None else Assembly.load(paths, frame=_indices(args.fixed))
+    if args.method == "cra":
+        raise InterlockError("CRA is not built yet; use --method rbe")
+    result = rbe(assembly, args.mu, density=args.density, cone=args.cone)
+    tilt = None
+    if args.tilt_axis is not None:
+        axis = args.tilt_axis if args.tilt_axis in ("x", "y", "xy30") else _numbers(args.tilt_axis, float, "--tilt-axis")
+        tilt = critical_tilt(assembly, axis, args.mu, density=args.density, cone=args.cone)
+    if args.json:
+        print(json.dumps({**result.to_dict(), "critical_tilt_degrees": tilt}, indent=2))
+        return 0
+    print(result)
+    if tilt is not None:
+        print(f"critical tilt about {args.tilt_axis}: " + ("stable up to 180 degrees" if tilt >= 180 else f"{tilt:.1f} degrees"))
     return 0
 
 

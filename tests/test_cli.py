@@ -169,3 +169,25 @@ def test_help_shows_an_example(command, capsys):
     with pytest.raises(SystemExit):
         main([*command, "--help"])
     assert "example" in capsys.readouterr().out
+
+
+def test_stability_reports_rbe_and_the_critical_tilt(capsys, shared_data):
+    wedge = shared_data / "compas_cra" / "type-c.json"
+    assert main(["stability", str(wedge), "--mu", "0.2", "--tilt-axis", "xy30", "--json"]) == 0
+    record = json.loads(capsys.readouterr().out)
+    assert record["stable"] is True
+    assert abs(record["critical_tilt_degrees"] - 15.0) <= 1.0  # the paper's Table 2, RBE, type-c about xy30
+
+
+@pytest.mark.parametrize("argv,message", [
+    (["--mu", "-1"], "mu must be a finite number >= 0"),
+    (["--mu", "0.5", "--method", "cra"], "CRA is not built yet"),
+    (["--mu", "0.5", "--tilt-axis", "1,x,0"], "expected comma-separated numbers"),
+])
+def test_stability_bad_input_is_one_line(shared_data, argv, message):
+    wedge = shared_data / "compas_cra" / "type-a.json"
+    run = subprocess.run([sys.executable, "-m", "interlock", "stability", str(wedge), *argv], capture_output=True,
+                         text=True)
+    assert run.returncode == 2 and "Traceback" not in run.stderr
+    lines = run.stderr.strip().splitlines()
+    assert len(lines) == 1 and message in lines[0], lines
