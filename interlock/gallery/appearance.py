@@ -11,7 +11,7 @@ from interlock.blocks.lozenge import Lozenge
 from interlock.errors import GalleryError
 from interlock.wallpaper.elements import GroupElement
 
-__all__ = ["as_assembly", "block_classes", "block_colours", "exploded", "PALETTE"]
+__all__ = ["as_assembly", "block_classes", "block_colours", "exploded", "exploded_factor", "PALETTE"]
 
 #: RGBA colours (uint8) for block classes 0, 1, 2, ... (cycled): colour-blind-safe (Okabe-Ito), opaque.
 PALETTE = np.array([[0, 114, 178, 255], [230, 159, 0, 255], [0, 158, 115, 255], [204, 121, 167, 255],
@@ -94,9 +94,7 @@ def exploded(assembly: Assembly, factor: float) -> Assembly:
     >>> float(exploded(a, 0.5).bounds.max() - a.bounds.max())
     0.5
     """
-    factor = float(factor)
-    if not np.isfinite(factor) or factor < 0:
-        raise GalleryError(f"exploded must be a finite factor >= 0, got {factor}")
+    factor = exploded_factor(factor)
     if factor == 0 or len(assembly) == 0:
         return assembly
     centroids = assembly.centroids
@@ -104,6 +102,21 @@ def exploded(assembly: Assembly, factor: float) -> Assembly:
     transforms[:, :3, 3] += factor * (centroids - centroids.mean(axis=0))
     return Assembly(assembly.meshes, assembly.types, transforms, assembly.labels, assembly.frame,
                     assembly.lattice, None, {**assembly.info, "exploded": factor})
+
+
+def exploded_factor(value) -> float:
+    """``value`` as an exploded-view factor: a finite number >= 0, else a :class:`GalleryError`.
+
+    >>> exploded_factor(0.5)
+    0.5
+    """
+    try:
+        factor = float(value)
+    except (TypeError, ValueError):
+        raise GalleryError(f"exploded must be a number >= 0, got {value!r}") from None
+    if not (np.isfinite(factor) and factor >= 0):
+        raise GalleryError(f"exploded must be a finite factor >= 0, got {factor}")
+    return factor
 
 
 def _is_cell_label(label) -> bool:

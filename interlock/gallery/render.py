@@ -16,7 +16,8 @@ from interlock.blocks.lozenge import LATTICE_BASIS, Lozenge, LozengeTiling
 from interlock.blocks.orbits import patch
 from interlock.blocks.rhomblock import rhomblock_assembly
 from interlock.errors import GalleryError, InterlockError
-from interlock.gallery.appearance import PALETTE, as_assembly, block_classes, block_colours, exploded as explode
+from interlock.gallery.appearance import PALETTE, as_assembly, block_classes, block_colours, exploded_factor
+from interlock.gallery.appearance import exploded as explode
 
 __all__ = ["render", "VIEWS", "ELEVATION", "AZIMUTH", "LIGHT", "AMBIENT", "FRAME_FADE", "FRAME_GREY",
            "EDGE_COLOUR", "TILING_CELLS", "PERIODS_SHOWN", "MAX_TILES", "MAX_PIXELS"]
@@ -199,12 +200,7 @@ def _radius(obj, radius) -> float | None:
 
 
 def _exploded(factor, view) -> float:
-    try:
-        factor = float(factor)
-    except (TypeError, ValueError):
-        raise GalleryError(f"exploded must be a number >= 0, got {factor!r}") from None
-    if not (math.isfinite(factor) and factor >= 0):
-        raise GalleryError(f"exploded must be a finite factor >= 0, got {factor}")
+    factor = exploded_factor(factor)
     if factor > 0 and view != "3d":
         raise GalleryError(f"exploded applies to the 3d view, not to the {view} view")
     return factor
