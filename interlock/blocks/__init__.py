@@ -7,6 +7,7 @@
 31
 """
 
+from interlock.blocks.arch import semicircular_arch
 from interlock.blocks.assembly import Assembly, AssemblyError
 from interlock.blocks.compas import load_compas
 from interlock.blocks.escher import Block, DeformationError, escher_block
@@ -18,4 +19,4 @@ from interlock.blocks.rhomblock import rhomblock, rhomblock_assembly
 __all__ = ["Assembly", "AssemblyError", "Block", "DeformationError", "escher_block", "patch", "periodic_cell",
            "cell_patch", "cell_reach",
            "presets", "Lozenge", "LozengeTiling", "TilingError", "random_hexagon", "staircase", "rhomblock",
-           "rhomblock_assembly", "load_compas"]
+           "rhomblock_assembly", "load_compas", "semicircular_arch"]
