@@ -15,13 +15,16 @@ from hypothesis import strategies as st
 
 from interlock import InterlockError
 from interlock.blocks.assembly import Assembly
-from interlock.verify.contacts import (DEFAULT_ANGLE_TOL, DEFAULT_CONTACT_RTOL, Contact, ContactError, contacts,
-                                       facets)
+from interlock.verify.contacts import (DEFAULT_ANGLE_TOL, DEFAULT_CONTACT_RTOL, DEFAULT_GAP_RTOL, Contact,
+                                       ContactError, contacts, facets)
 
 #: Recorded on the reference data (areas positive, normals opposite, vertices on both
 #: facets, every contact checked against a brute-force triangle-by-triangle overlap).
 BUNNY_CONTACTS, BUNNY_PAIRS, BUNNY_AREA = 1135, 447, 5.78515625
 ANIA_CONTACTS = 6
+#: compas_cra's solved armadillo (compas_cra/data/samples/armadillo_cra.json, tmax = 0.05, amin = 1e-4) has 1014
+#: interfaces, one per pair of blocks; it skips pairs of two supports, which touch in 29 more pairs.
+ARMADILLO_UPSTREAM_PAIRS, ARMADILLO_SUPPORT_PAIRS, ARMADILLO_DEFAULT_CONTACTS = 1014, 29, 341
 
 
 def box(lo, hi):
@@ -205,6 +208,84 @@ def test_small_and_separated_assemblies():
     assert contacts(Assembly.from_meshes([cube(0, 0)])) == ()
     assert contacts(Assembly.from_meshes([cube(0, 0), cube(5, 0)])) == ()
     assert len(contacts(grid_3x3(), rtol=0.0, angle_tol=0.0)) == 12  # exact input needs no slack
+
+
+# --- contacts across a gap (compas_assembly's tmax) ---------------------------------------------
+
+
+def test_gap_bridges_a_narrow_gap_on_the_mid_plane():
+    a = Assembly.from_meshes([cube(0, 0), cube(1.001, 0)])
+    assert DEFAULT_GAP_RTOL == 0 and contacts(a) == () and contacts(a, gap=1e-4) == ()  # 1e-4 * scale < 1e-3
+    (c,) = contacts(a, gap=2e-3)  # 2e-3 * scale = 4.9e-3
+    assert (c.i, c.j) == (0, 1) and c.area == pytest.approx(1) and len(c.vertices) == 4
+    np.testing.assert_allclose(c.normal, [1, 0, 0], atol=1e-12)
+    assert c.polygon.equals(shapely.box(-0.5, -0.5, 0.5, 0.5))  # about the facet's centroid
+    assert sorted(map(tuple, c.vertices.round(9))) == [(1.0005, y, z) for y in (0, 1) for z in (0, 1)]
+    np.testing.assert_allclose(c.origin + c.polygon.exterior.coords[0] @ c.basis, c.vertices[0], atol=1e-12)
+    # it records the gap it bridges; the faces stay planar, so check() keeps trusting slides across it
+    assert c.separation == pytest.approx(1e-3) and c.deviation == pytest.approx(1e-3) and c.planar
+    assert "across a gap of up to 0.001" in str(c) and c.to_dict()["separation"] == pytest.approx(1e-3)
+    (half,) = contacts(Assembly.from_meshes([cube(0, 0), cube(1.001, 0.5)]), gap=2e-3)
+    assert half.area == pytest.approx(0.5)
+    # faces that touch are no gap contact, also with a gap tolerance
+    assert all(c.separation == 0 for c in contacts(grid_3x3(), gap=2e-3))
+    assert len(contacts(grid_3x3(), gap=2e-3)) == 12
+
+
+def test_gap_does_not_pair_faces_tilted_beyond_the_angle_tolerance():
+    tilt = trimesh.transformations.rotation_matrix(0.01, [0, 1, 0], point=[1.001, 0.5, 0.5])
+    a = Assembly.from_meshes([cube(0, 0), cube(1.001, 0).apply_transform(tilt)])
+    assert contacts(a, gap=5e-3) == ()  # 0.01 rad > angle_tol = 1e-4
+    (c,) = contacts(a, gap=5e-3, angle_tol=0.02)  # faces 1e-3 + 0.5 * sin(0.01) apart at most
+    assert c.area == pytest.approx(1, rel=1e-3) and c.separation == pytest.approx(1e-3 + 0.005, rel=1e-2)
+
+
+def test_default_gap_reproduces_the_contacts():
+    for a in (grid_3x3(), Assembly.from_meshes(_mixed_meshes()), folded_pair(1e-7), Assembly.from_meshes(
+            [cube(0, 0), cube(1 + DEFAULT_CONTACT_RTOL, 0.3)])):
+        before, after = contacts(a), contacts(a, gap=0.0)
+        assert [c.to_dict() for c in before] == [c.to_dict() for c in after]
+        assert all(c.separation == 0 for c in after)
+    assert len(contacts(grid_3x3(), gap=0)) == 12 and len(contacts(Assembly.from_meshes(_mixed_meshes()))) == 6
+
+
+@pytest.mark.parametrize("bad", [-1e-3, float("nan"), float("inf"), "0.01", None, True])
+def test_bad_gap(bad):
+    with pytest.raises(InterlockError, match=r"gap must be a finite number >= 0"):
+        contacts(grid_3x3(), gap=bad)
+
+
+def _pairs(found):
+    return {(c.i, c.j) for c in found}
+
+
+def test_compas_cra_armadillo_with_upstream_gap(shared_data):
+    from interlock.blocks import load_compas
+
+    a = load_compas(shared_data / "compas_cra" / "armadillo.json")
+    # upstream's absolute tmax = 0.05 and amin = 1e-4 relative to the model size; its faces pair up to 0.16 rad apart
+    found = contacts(a, gap=0.05 / a.scale, area_rtol=1e-4 / a.scale**2, angle_tol=0.2)
+    pairs = _pairs(found)
+    supports = set(a.frame)
+    both_supports = {p for p in pairs if set(p) <= supports}
+    assert len(both_supports) == ARMADILLO_SUPPORT_PAIRS
+    assert len(pairs - both_supports) == ARMADILLO_UPSTREAM_PAIRS
+    assert max(c.separation for c in found) <= (DEFAULT_CONTACT_RTOL * a.scale + 0.05) * (1 + 1e-9)
+
+
+@pytest.mark.parametrize("name, area", [("cube-curve-short", 0.471), ("cube-curve-tall", 0.471),
+                                        ("curve-3-blocks", None)])
+def test_compas_cra_curved_interfaces_as_small_planar_contacts(shared_data, name, area):
+    from interlock.blocks import load_compas
+
+    a = load_compas(shared_data / "compas_cra" / f"{name}.json")
+    default = contacts(a)
+    found = contacts(a, gap=1e-3, angle_tol=0.2)  # facing triangles of the two sides differ in angle and offset
+    assert len(found) >= max(4 * len(default), 250) and all(c.planar for c in found)
+    assert _pairs(found) == {(k, k + 1) for k in range(len(a) - 1)}  # a stack: every interface is found
+    if area is not None:  # the curved surface's area (triangles of block 0 within 1e-3 * scale of block 1)
+        assert sum(c.area for c in found) == pytest.approx(area, rel=0.01)
+        assert sum(c.area for c in default) < 0.4 * area
 
 
 # --- triangulated and polygonal faces --------------------------------------------------------
