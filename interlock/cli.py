@@ -100,16 +100,17 @@ def _parser() -> argparse.ArgumentParser:
     gallery.set_defaults(run=_run_gallery)
 
     stability = commands.add_parser(
-        "stability", help="does an assembly stand under its own weight with friction (RBE, seed 001)?",
-        description="Rigid-block equilibrium: compression-only forces at the contact vertices, linearised "
-                    "friction cones, self-weight. COMPAS assembly JSON takes its supports as the frame.",
-        epilog="examples:\n  interlock stability type-a.json --mu 0.84\n"
+        "stability", help="does an assembly stand under its own weight with friction (RBE / CRA, seed 001)?",
+        description="Rigid-block equilibrium (RBE): compression-only forces at the contact vertices, linearised "
+                    "friction cones, self-weight; coupled rigid-block analysis (CRA) also asks for a virtual "
+                    "motion that realises them. COMPAS assembly JSON takes its supports as the frame.",
+        epilog="examples:\n  interlock stability type-a.json --mu 0.84\n  interlock stability H.json --mu 0.84 --method cra\n"
                "  interlock stability type-c.json --mu 0.2 --tilt-axis xy30 --json",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     stability.add_argument("paths", nargs="+", help="a COMPAS JSON file, or mesh files (one per block)")
     stability.add_argument("--mu", type=float, required=True, help="friction coefficient")
-    stability.add_argument("--method", default="rbe", choices=("rbe", "cra"), help="rbe (default); cra is not built yet")
+    stability.add_argument("--method", default="rbe", choices=("rbe", "cra"), help="rbe: equilibrium only (default); cra: equilibrium realised by a virtual motion (exact MILP, slower)")
     stability.add_argument("--fixed", default=None, metavar="LIST", help="frame for mesh files, e.g. 0,1")
     stability.add_argument("--density", type=float, default=1.0, help="density of every block (default 1)")
     stability.add_argument("--cone", default="paper", choices=("paper", "inner"),
@@ -271,16 +272,16 @@ def _run_periodic(args) -> int:
 def _run_stability(args) -> int:
     from interlock.blocks import Assembly
     from interlock.verify import critical_tilt, rbe
+    from interlock.verify.cra import cra
 
     paths = args.paths[0] if len(args.paths) == 1 else args.paths
     assembly = Assembly.load(paths) if args.fixed is None else Assembly.load(paths, frame=_indices(args.fixed))
-    if args.method == "cra":
-        raise InterlockError("CRA is not built yet; use --method rbe")
-    result = rbe(assembly, args.mu, density=args.density, cone=args.cone)
+    analyse = cra if args.method == "cra" else rbe
+    result = analyse(assembly, args.mu, density=args.density, cone=args.cone)
     tilt = None
     if args.tilt_axis is not None:
         axis = args.tilt_axis if args.tilt_axis in ("x", "y", "xy30") else _numbers(args.tilt_axis, float, "--tilt-axis")
-        tilt = critical_tilt(assembly, axis, args.mu, density=args.density, cone=args.cone)
+        tilt = critical_tilt(assembly, axis, args.mu, method=args.method, density=args.density, cone=args.cone)
     if args.json:
         print(json.dumps({**result.to_dict(), "critical_tilt_degrees": tilt}, indent=2))
         return 0

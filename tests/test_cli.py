@@ -179,9 +179,17 @@ def test_stability_reports_rbe_and_the_critical_tilt(capsys, shared_data):
     assert abs(record["critical_tilt_degrees"] - 15.0) <= 1.0  # the paper's Table 2, RBE, type-c about xy30
 
 
+def test_stability_cra_says_model_h_falls_where_rbe_holds_it(capsys, shared_data):
+    model_h = shared_data / "compas_cra" / "H.json"
+    assert main(["stability", str(model_h), "--mu", "0.84", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["stable"] is True  # RBE: prestress between the walls
+    assert main(["stability", str(model_h), "--mu", "0.84", "--method", "cra"]) == 0
+    assert capsys.readouterr().out.startswith("CRA unstable (mu 0.84")
+
+
 @pytest.mark.parametrize("argv,message", [
     (["--mu", "-1"], "mu must be a finite number >= 0"),
-    (["--mu", "0.5", "--method", "cra"], "CRA is not built yet"),
+    (["--mu", "-1", "--method", "cra"], "mu must be a finite number >= 0"),
     (["--mu", "0.5", "--tilt-axis", "1,x,0"], "expected comma-separated numbers"),
 ])
 def test_stability_bad_input_is_one_line(shared_data, argv, message):

@@ -13,8 +13,9 @@ from interlock.verify.contacts import Contact, contacts
 from interlock.verify.criterion import CriterionResult, criterion_4_3
 from interlock.verify.matrix import InterlockingMatrix, interlocking_matrix
 from interlock.verify.stability import StabilityResult, critical_tilt, rbe
+from interlock.verify.cra import CRAResult, cra
 from interlock.verify.periodic import PeriodicVerdict, edge_quadruples, periodic_check, symbol
 
 __all__ = ["Contact", "contacts", "CriterionResult", "criterion_4_3", "InterlockingMatrix", "interlocking_matrix",
            "Verdict", "check", "PeriodicVerdict", "edge_quadruples", "periodic_check", "symbol",
-           "StabilityResult", "rbe", "critical_tilt"]
+           "StabilityResult", "rbe", "critical_tilt", "CRAResult", "cra"]

@@ -192,7 +192,7 @@ def tilted_gravity(axis, angle: float, gravity=(0.0, 0.0, -1.0)) -> np.ndarray:
 
 def critical_tilt(assembly: Assembly, axis, mu: float, method: str = "rbe", density: float = 1.0,
                   frame=None, cone: str = "paper", sides: int = DEFAULT_SIDES, step: float = DEFAULT_TILT_STEP,
-                  tol: float = DEFAULT_TILT_TOL, contacts=None) -> float:
+                  tol: float = DEFAULT_TILT_TOL, contacts=None, cra_options=None) -> float:
     """The smallest tilt angle (degrees, in [0, 180]) at which the assembly is no longer stable.
 
     The assembly is turned counter-clockwise about ``axis`` ("x", "y", "xy30" =
@@ -204,8 +204,13 @@ def critical_tilt(assembly: Assembly, axis, mu: float, method: str = "rbe", dens
 
     Parameters
     ----------
-    method : {"rbe"}
-        "cra" (coupled rigid-block analysis) is not implemented yet.
+    method : {"rbe", "cra"}
+        :func:`rbe` (one LP per angle) or :func:`~interlock.verify.cra.cra`
+        (coupled rigid-block analysis); an angle where CRA is "inconclusive"
+        counts as not stable, so the CRA angle errs on the safe side.
+    cra_options : dict, optional
+        Keyword arguments for :func:`~interlock.verify.cra.cra` (``eps``, ``eta``, ``sectors``,
+        ``force_bound``, ``min_slide``, ``time_limit``).
     step, tol : float
         Scan step and bisection tolerance in degrees; a stable window narrower
         than ``step`` after the first unstable angle cannot be missed, but an
@@ -222,16 +227,25 @@ def critical_tilt(assembly: Assembly, axis, mu: float, method: str = "rbe", dens
     >>> abs(angle - math.degrees(math.atan(0.5))) <= 0.1
     True
     """
-    if method == "cra":
-        raise StabilityError("method='cra' (coupled rigid-block analysis) is not built yet; use method='rbe'")
-    if method != "rbe":
-        raise StabilityError(f"method must be 'rbe' (or 'cra', not built yet), got {method!r}")
+    if method not in ("rbe", "cra"):
+        raise StabilityError(f"method must be 'rbe' or 'cra', got {method!r}")
+    if cra_options and method != "cra":
+        raise StabilityError("cra_options apply to method='cra' only")
     step, tol = _positive("step", step), _positive("tol", tol)
-    system = _System.build(assembly, mu, density, frame, cone, sides, contacts)
     axis = _axis(axis)
+    if method == "rbe":
+        system = _System.build(assembly, mu, density, frame, cone, sides, contacts)
 
-    def stable(angle: float) -> bool:
-        return system.feasible(tilted_gravity(axis, angle))
+        def stable(angle: float) -> bool:
+            return system.feasible(tilted_gravity(axis, angle))
+    else:
+        from interlock.verify.cra import decider
+
+        stable_under = decider(assembly, mu, density=density, frame=frame, cone=cone, sides=sides,
+                               contacts=contacts, **(cra_options or {}))
+
+        def stable(angle: float) -> bool:
+            return stable_under(tilted_gravity(axis, angle)) is True
 
     if not stable(0.0):
         return 0.0

@@ -145,6 +145,17 @@ def test_rhomblock_patch_with_ring_frame_stable_without_friction():
         assert rbe(patch, mu=0.0, gravity=g, contacts=found).stable, g
 
 
+def test_topolite_bunny_with_its_frame_stable_without_friction(shared_data):
+    # interlocked (test_check: full rank with parts 1 and 2 fixed), so any load is carried without friction
+    from tests.verify.test_check import BUNNY_PARTS
+
+    paths = [shared_data / "topolite" / "bunny" / f"part_{k}.obj" for k in range(1, BUNNY_PARTS + 1)]
+    bunny = Assembly.load(paths).with_frame([0, 1])
+    found = contacts(bunny)
+    for g in _directions():
+        assert rbe(bunny, mu=0.0, gravity=g, contacts=found).stable, g
+
+
 def test_plain_grid_falls_without_friction_but_rbe_wedges_it_with_friction():
     grid = [trimesh.creation.box(bounds=[[x, y, 0], [x + 1, y + 1, 1]]) for x in range(3) for y in range(3)]
     assembly = Assembly.from_meshes(grid, frame=[0, 1, 2, 3, 5, 6, 7, 8])
@@ -203,9 +214,11 @@ def test_not_an_assembly_raises():
         rbe([trimesh.creation.box()], mu=0.5)
 
 
-def test_cra_is_not_built_yet():
-    with pytest.raises(InterlockError, match="CRA|cra.*not built"):
-        critical_tilt(_stack(), "x", 0.5, method="cra")
+def test_unknown_method_raises():
+    with pytest.raises(InterlockError, match="method must be 'rbe' or 'cra'"):
+        critical_tilt(_stack(), "x", 0.5, method="fem")
+    with pytest.raises(InterlockError, match="cra_options"):
+        critical_tilt(_stack(), "x", 0.5, cra_options={"eps": 1e-5})
 
 
 @pytest.mark.parametrize("axis", ["z", (0, 0, 0), (1, 2)])

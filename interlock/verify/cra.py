@@ -1,0 +1,619 @@
+"""Coupled rigid-block analysis (CRA paper, Sec. 3.1, problem (11)), solved globally as a MILP.
+
+RBE (:func:`interlock.verify.stability.rbe`) asks only for forces in
+equilibrium.  CRA also asks for a virtual motion ``dq`` of the free blocks
+that *realises* them:
+
+- normal force only where the motion closes the contact by the overlap
+  ``eps``, Eq. (10): ``f_n (dd_n + eps) = 0``, ``dd_n + eps >= 0``;
+- friction opposite to the virtual slide, Eq. (9): ``f_t = -alpha dd_t``,
+  ``alpha >= 0`` (no slide, no friction);
+- small motions, ``|dd| <= eta`` per component;
+
+where ``dd = A_eq^T dq`` (Eq. (8)) are the relative displacements at the
+contact vertices.  The paper solves (11) locally with IPOPT; here it is
+decided globally:
+
+1. **MILP relaxation.**  A binary per vertex switches Eq. (10); binaries over
+   ``sectors`` angular sectors of the contact plane put the slide ``dd_t``
+   and the reversed friction ``-f_t`` in the same sector, with a slide of at
+   least ``min_slide`` along the sector's bisector where there is friction.
+   Every solution of (11) whose forces stay below ``force_bound`` and whose
+   friction vertices slide at least that much is a solution of the MILP, so
+   an infeasible MILP proves "unstable" (HiGHS through :func:`scipy.optimize.milp`).
+2. **Exact check.**  A feasible MILP gives a motion.  With the motion fixed,
+   (11) is linear in ``(f_n, alpha)``: an LP over exactly the contacts it
+   closes and the slides it makes.  A feasible LP is a solution of (11):
+   "stable", with the forces and the motion.  If it fails (the MILP's
+   friction was only in the right sector), the MILP's forces fix the
+   active set and the friction directions and an LP looks for a motion that
+   realises them exactly, and SLSQP solves (11) locally from the MILP's point; then the
+   sectors are refined (``4 -> 8 -> 16``).
+   If none of this gives a solution, the answer is "inconclusive".
+
+Only the ratio ``eta / eps`` matters (the constraints are homogeneous in
+``(dq, eps, eta)``); internally lengths of the motion are in units of ``eps``.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.linalg import null_space
+from scipy.optimize import Bounds, LinearConstraint, linprog, milp, minimize
+
+from interlock.verify.stability import (DEFAULT_SIDES, StabilityError, _gravity, _json_float, _positive,
+                                        _System)
+
+__all__ = ["CRAResult", "cra", "DEFAULT_EPS", "DEFAULT_ETA", "DEFAULT_SECTORS", "DEFAULT_FORCE_BOUND",
+           "DEFAULT_MIN_SLIDE", "REFINED_SECTORS"]
+
+#: Overlap ``eps`` of a loaded contact vertex, as a fraction of the model size (paper: 1e-5 .. 1e-4 of the
+#: block dimension).
+DEFAULT_EPS = 1e-5
+#: Bound ``eta`` on every relative virtual displacement, as a fraction of the model size (paper: 1e-3 .. 1e-2).
+#: Only ``eta / eps`` changes the verdict: here 100.  Upstream compas_cra uses 10 (1e-4 and 1e-3 absolute);
+#: then a block closing two faces of a V groove slides at least 1.73 eps down them, so friction along the
+#: groove tilts by 10 degrees or more and type-a gives 20.7 instead of 21.8 degrees (Table 2).
+DEFAULT_ETA = 1e-3
+#: Angular sectors of the contact plane in the first MILP, and the refinements tried when its motion
+#: cannot be made exact.
+DEFAULT_SECTORS = 4
+REFINED_SECTORS = (8, 16)
+#: Largest normal force at one vertex, in units of the total weight of the free blocks.
+DEFAULT_FORCE_BOUND = 1e3
+#: Smallest virtual slide (along the sector bisector) of a vertex carrying friction, as a fraction of ``eps``.
+DEFAULT_MIN_SLIDE = 1e-3
+#: A vertex is closed when ``dd_n + eps <= ACTIVE_TOL * eps``; it slides when ``|dd_t| > SLIDE_TOL * eps``.
+ACTIVE_TOL = 1e-7
+SLIDE_TOL = 1e-7
+#: Seconds HiGHS may spend on one MILP before the answer is "inconclusive".
+DEFAULT_TIME_LIMIT = 60.0
+#: Most closed vertices for the local (SLSQP) repair of a MILP point; beyond, only the LP repairs run.
+POLISH_LIMIT = 400
+POLISH_ITERATIONS = 50
+#: Motions of earlier stable loads that :func:`decider` tries first.
+WARM_STARTS = 3
+
+STATUSES = ("stable", "unstable", "inconclusive")
+
+
+@dataclass(frozen=True, eq=False)
+class CRAResult:
+    """The outcome of :func:`cra`.
+
+    Attributes
+    ----------
+    status : {"stable", "unstable", "inconclusive"}
+        "stable": an exact solution of (11) was found (``forces`` and ``motion`` are one);
+        "unstable": the MILP relaxation has no solution, so (11) has none within the bounds in
+        ``parameters``; "inconclusive": the relaxation has one but no exact solution was found.
+    stable : bool or None
+        ``True``, ``False``, or ``None`` for inconclusive.
+    forces : ndarray (s, 3)
+        Per contact vertex ``(f_n, f_u, f_v)`` in the contact's frame, acting on block ``j`` (as in
+        :class:`~interlock.verify.stability.StabilityResult`); NaN unless stable.
+    motion : ndarray (f, 6)
+        The realising virtual motion of each free block: ``(t, omega)`` (translation, rotation about the
+        block's centroid) in world units, with loaded vertices overlapping by ``eps`` (absolute); NaN unless
+        stable.
+    free : ndarray of int (f,)
+        The blocks that ``motion`` rows belong to.
+    closed : ndarray of bool (s,)
+        Vertices that the motion closes (``dd_n = -eps``), where normal force may act.
+    sliding : ndarray (s, 2)
+        The relative virtual slide ``dd_t`` in each contact's ``(u, v)`` basis, in units of ``eps``.
+    points, vertex_contact, contacts
+        As in :class:`~interlock.verify.stability.StabilityResult`.
+    message : str
+        What decided the verdict.
+    parameters : dict
+        ``mu``, ``cone``, ``sides``, ``eps`` and ``eta`` (relative and absolute), ``sectors`` tried,
+        ``force_bound``, ``min_slide``, ``density``, ``gravity``, ``frame``.
+    timings : dict
+        Seconds for ``contacts``, ``build``, ``milp`` (all MILPs) and ``lp`` (all exact checks).
+    """
+
+    status: str
+    forces: np.ndarray
+    motion: np.ndarray
+    free: np.ndarray
+    closed: np.ndarray
+    sliding: np.ndarray
+    points: np.ndarray
+    vertex_contact: np.ndarray
+    message: str
+    contacts: tuple = field(repr=False)
+    parameters: dict = field(default_factory=dict)
+    timings: dict = field(default_factory=dict)
+
+    @property
+    def stable(self) -> bool | None:
+        return {"stable": True, "unstable": False}.get(self.status)
+
+    def __str__(self) -> str:
+        p = self.parameters
+        return (f"CRA {self.status} (mu {p.get('mu')}, {p.get('cone')} cone with {p.get('sides')} sides, "
+                f"eta/eps {p.get('eta') / p.get('eps'):.3g}): {self.message}; {sum(self.timings.values()):.3g} s")
+
+    def to_dict(self) -> dict:
+        """JSON-serialisable summary."""
+        return {"status": self.status, "stable": self.stable, "message": self.message,
+                "forces": np.nan_to_num(self.forces, nan=0.0).tolist(),
+                "motion": np.nan_to_num(self.motion, nan=0.0).tolist(), "free": self.free.tolist(),
+                "closed": self.closed.tolist(), "vertex_contact": self.vertex_contact.tolist(),
+                "contacts": [(c.i, c.j) for c in self.contacts],
+                "parameters": {k: (_json_float(v) if isinstance(v, float) else v) for k, v in self.parameters.items()},
+                "timings": dict(self.timings)}
+
+
+def cra(assembly, mu: float, density: float = 1.0, gravity=(0.0, 0.0, -1.0), frame=None, cone: str = "paper",
+        sides: int = DEFAULT_SIDES, eps: float = DEFAULT_EPS, eta: float = DEFAULT_ETA,
+        sectors: int = DEFAULT_SECTORS, force_bound: float = DEFAULT_FORCE_BOUND,
+        min_slide: float = DEFAULT_MIN_SLIDE, time_limit: float = DEFAULT_TIME_LIMIT, contacts=None) -> CRAResult:
+    """Coupled rigid-block analysis: is there an equilibrium that a virtual motion realises? (CRA paper, (11)).
+
+    Forces ``f`` at the contact vertices and a virtual motion ``dq`` of the
+    free blocks with relative vertex displacements ``dd = A_eq^T dq`` (Eq. (8)) must satisfy
+
+    - equilibrium and the linearised friction cone, as in :func:`~interlock.verify.stability.rbe`
+      (Eqs. (7b)-(7d)): ``A_eq f = -p``, ``A_fr f <= 0``, ``f_n >= 0``;
+    - contact, Eq. (10): ``f_n (dd_n + eps) = 0`` with ``dd_n + eps >= 0``;
+    - friction against the slide, Eq. (9): ``f_t = -alpha dd_t``, ``alpha >= 0``;
+    - ``|dd| <= eta`` componentwise.
+
+    The paper minimises ``|f_n|^2 + |alpha|^2`` locally; here the question
+    "does (11) have a solution?" is decided globally by a MILP relaxation and
+    an exact LP check at its motion (see the module docstring), and the forces
+    reported minimise ``sum f_n`` for that motion.
+
+    Parameters
+    ----------
+    assembly, mu, density, gravity, frame, cone, sides, contacts
+        As for :func:`~interlock.verify.stability.rbe`.
+    eps, eta : float
+        Overlap and displacement bound as fractions of ``assembly.scale``; ``0 < eps < eta``.  Only
+        ``eta / eps`` changes the verdict.
+    sectors : int
+        Angular sectors (``>= 3``) of the first MILP; :data:`REFINED_SECTORS` follow if needed.
+    force_bound : float
+        Largest vertex normal force in units of the free blocks' total weight (the MILP's big M).
+    min_slide : float
+        Smallest slide of a friction-carrying vertex, as a fraction of ``eps``.
+    time_limit : float
+        Seconds per MILP; a MILP that runs out of time gives "inconclusive".
+
+    Returns
+    -------
+    CRAResult
+
+    Raises
+    ------
+    StabilityError
+        Bad parameters (as for ``rbe``, and ``eps``, ``eta``, ``sectors``, ``force_bound``,
+        ``min_slide``, ``time_limit``).
+
+    Examples
+    --------
+    A block between two fixed walls: RBE holds it by prestress, CRA does not
+    (model H, Sec. 2.2), unless the walls lean inwards (wedging).
+
+    >>> import trimesh
+    >>> from interlock.blocks import Assembly
+    >>> from interlock.verify.stability import rbe
+    >>> walls = [trimesh.creation.box(bounds=b) for b in ([[-1, 0, 0], [0, 1, 2]], [[1, 0, 0], [2, 1, 2]])]
+    >>> middle = trimesh.creation.box(bounds=[[0, 0, 1], [1, 1, 2]])
+    >>> h = Assembly.from_meshes(walls + [middle], frame=[0, 1])
+    >>> rbe(h, mu=0.84).stable, cra(h, mu=0.84).status
+    (True, 'unstable')
+    """
+    problem = _Problem.build(assembly, mu, density, frame, cone, sides, eps, eta, force_bound, min_slide, contacts)
+    return problem.solve(_gravity(gravity), _sector_count(sectors), _positive("time_limit", time_limit))
+
+
+def decider(assembly, mu: float, sectors: int = DEFAULT_SECTORS, time_limit: float = DEFAULT_TIME_LIMIT,
+            **options):
+    """``gravity -> True | False | None``: :func:`cra`'s verdict under many loads, with contacts and matrices
+    built once (for :func:`~interlock.verify.stability.critical_tilt`); ``options`` as for :func:`cra`.
+
+    The motions of earlier stable loads are tried first (a tilt scan moves the load a little at a time).
+    """
+    problem = _Problem.build(assembly, mu, **options)
+    sectors, time_limit = _sector_count(sectors), _positive("time_limit", time_limit)
+    known: list[np.ndarray] = []
+
+    def stable(gravity) -> bool | None:
+        result = problem.solve(_gravity(gravity), sectors, time_limit, known)
+        if result.stable:
+            eps, length = result.parameters["eps_absolute"], result.parameters["length"]
+            known.insert(0, np.hstack([result.motion[:, :3] / eps, result.motion[:, 3:] * length / eps]).ravel())
+            del known[WARM_STARTS:]
+        return result.stable
+
+    return stable
+
+
+def _sector_count(sectors) -> int:
+    if isinstance(sectors, bool) or not isinstance(sectors, (int, np.integer)) or sectors < 3:
+        raise StabilityError(f"sectors must be an integer >= 3, got {sectors!r}")
+    return int(sectors)
+
+
+@dataclass(frozen=True, eq=False)
+class _Problem:
+    """The CRA problem of one assembly, without gravity (which only changes the equilibrium's right-hand side)."""
+
+    system: _System
+    kinematic: sp.csr_matrix  # D = A_eq^T, rows (n, u, v) per vertex, motion in units of eps
+    ratio: float  # eta / eps
+    force_bound: float
+    min_slide: float
+    parameters: dict
+
+    @classmethod
+    def build(cls, assembly, mu, density=1.0, frame=None, cone="paper", sides=DEFAULT_SIDES, eps=DEFAULT_EPS,
+              eta=DEFAULT_ETA, force_bound=DEFAULT_FORCE_BOUND, min_slide=DEFAULT_MIN_SLIDE, contacts=None):
+        system = _System.build(assembly, mu, density, frame, cone, sides, contacts)
+        eps, eta = _positive("eps", eps), _positive("eta", eta)
+        if not eps < eta:
+            raise StabilityError(f"eps (overlap) must be smaller than eta (displacement bound), got {eps} >= {eta}")
+        force_bound, min_slide = _positive("force_bound", force_bound), _positive("min_slide", min_slide)
+        if not min_slide < eta / eps:
+            raise StabilityError(f"min_slide must be below eta / eps = {eta / eps:.3g}, got {min_slide}")
+        parameters = {**system.parameters, "eps": eps, "eta": eta, "eps_absolute": eps * assembly.scale,
+                      "eta_absolute": eta * assembly.scale, "force_bound": force_bound, "min_slide": min_slide,
+                      "length": assembly.scale}
+        return cls(system, system.a_eq.T.tocsr(), eta / eps, force_bound, min_slide, parameters)
+
+    # --- the whole decision -----------------------------------------------------------------------------------
+
+    def solve(self, gravity: np.ndarray, sectors: int, time_limit: float, known=()) -> CRAResult:
+        timings = {**self.system.timings, "milp": 0.0, "lp": 0.0}
+        load = np.outer(self.system.weights, gravity)
+        total = float(np.abs(load).sum()) or 1.0
+        b_eq = -np.hstack([load, self.system.arms]).ravel() / total
+        tried, message, status = [], "", "inconclusive"
+        started = time.perf_counter()
+        quick = self._from_rbe(gravity, b_eq, known)
+        timings["lp"] += time.perf_counter() - started
+        if quick is not None:
+            status, forces, motion, message = quick
+            parameters = {**self.parameters, "sectors": tried, "gravity": gravity.tolist()}
+            return self._result(status, message, forces * total if status == "stable" else None, motion,
+                                parameters, timings)
+        for count in (sectors,) + tuple(s for s in REFINED_SECTORS if s > sectors):
+            tried.append(count)
+            started = time.perf_counter()
+            outcome = self._milp(b_eq, count, time_limit)
+            timings["milp"] += time.perf_counter() - started
+            if outcome is None:
+                status, message = "unstable", (f"no motion realises an equilibrium (MILP with {count} sectors "
+                                               f"infeasible)")
+                break
+            if isinstance(outcome, str):
+                message = outcome
+                break
+            forces, motion = outcome
+            started = time.perf_counter()
+            exact = self._exact(b_eq, motion)
+            for repair in (self._realise, lambda f: self._polish(b_eq, f, motion)):
+                if exact is not None:
+                    break
+                repaired = repair(forces)
+                exact = None if repaired is None else self._exact(b_eq, repaired)
+                motion = motion if repaired is None else repaired
+            timings["lp"] += time.perf_counter() - started
+            if exact is not None:
+                status, message = "stable", f"equilibrium realised by a virtual motion ({count} sectors)"
+                forces = exact
+                break
+            message = f"the MILP's motions could not be made exact with up to {count} sectors"
+        parameters = {**self.parameters, "sectors": tried, "gravity": gravity.tolist()}
+        return self._result(status, message, forces * total if status == "stable" else None,
+                            motion if status == "stable" else None, parameters, timings)
+
+    def _from_rbe(self, gravity, b_eq, known=()):
+        """Decide quickly where possible: no RBE equilibrium means "unstable" (CRA only removes solutions);
+        a known motion (``known``, e.g. of a nearby load), or one realising RBE's least-force equilibrium
+        exactly, that carries the load means "stable".  ``None`` otherwise."""
+        x, status, _, _ = self.system._linprog(gravity, least_force=True)
+        if status != 0:
+            return "unstable", None, None, "RBE has no equilibrium, so no motion can realise one"
+        for motion in known:
+            exact = self._exact(b_eq, motion)
+            if exact is not None:
+                return "stable", exact, motion, "equilibrium realised by the motion of a nearby load"
+        forces = x.reshape(-1, 3) if x is not None else np.zeros((0, 3))
+        candidates = [lambda: self._realise(forces)] + [lambda m=m: self._polish(b_eq, forces, m) for m in known]
+        for candidate in candidates:
+            motion = candidate()
+            exact = None if motion is None else self._exact(b_eq, motion)
+            if exact is not None:
+                return "stable", exact, motion, "equilibrium realised by a virtual motion (local repair)"
+        return None
+
+    # --- MILP relaxation --------------------------------------------------------------------------------------
+
+    @cached_property
+    def _reach(self) -> np.ndarray:
+        """Per vertex ``(max dd_n + eps, max |dd_t|)`` over the allowed motions (the MILP's big Ms), eps = 1."""
+        d = self.kinematic
+        s = d.shape[0] // 3
+        a_ub = sp.vstack([d, -d], format="csr")
+        b_ub = np.concatenate([np.full(3 * s, self.ratio), np.tile([1.0, self.ratio, self.ratio], s)])
+        largest = np.full(3 * s, self.ratio)  # max |dd| per row
+        for row in range(3 * s):
+            for sign in ((1.0,) if row % 3 == 0 else (1.0, -1.0)):
+                outcome = linprog(-sign * d[row].toarray().ravel(), A_ub=a_ub, b_ub=b_ub, bounds=(None, None),
+                                  method="highs")
+                if outcome.status == 0:
+                    largest[row] = max(largest[row] if sign < 0 else 0.0, -outcome.fun)
+        largest = largest.reshape(-1, 3) * (1 + 1e-6) + 1e-9
+        return np.column_stack([largest[:, 0] + 1.0, np.hypot(largest[:, 1], largest[:, 2])])
+
+    def _force_bounds(self, b_eq):
+        """Per vertex, the largest ``f_n`` of any RBE equilibrium, capped at ``force_bound`` (the MILP's big M)."""
+        system = self.system
+        s = len(system.points)
+        bounds = np.full(s, self.force_bound)
+        box = system.bounds.copy()
+        box[0::3, 1] = self.force_bound
+        for v in range(s):
+            cost = np.zeros(3 * s)
+            cost[3 * v] = -1.0
+            outcome = linprog(cost, A_ub=system.a_ub, b_ub=np.zeros(system.a_ub.shape[0]), A_eq=system.a_eq,
+                              b_eq=b_eq, bounds=box, method="highs")
+            if outcome.status == 0:
+                bounds[v] = min(self.force_bound, -outcome.fun * (1 + 1e-6) + 1e-9)
+        return bounds
+
+    def _milp(self, b_eq, sectors, time_limit):
+        """Forces and motion of the relaxation, ``None`` if infeasible, or a message if HiGHS did not decide."""
+        system, d = self.system, self.kinematic
+        s, free = len(system.points), system.a_eq.shape[0]
+        if s == 0:
+            return None if not np.allclose(b_eq, 0.0) else (np.zeros((0, 3)), np.zeros(free))
+        n_f, n_q, n_z, n_s = 3 * s, free, s, s * sectors
+        size = n_f + n_q + n_z + n_s
+        of, oq, oz, os_ = 0, n_f, n_f + n_q, n_f + n_q + n_z
+        ratio = self.ratio
+        mu_c = system.parameters["mu"] / (math.cos(math.pi / system.parameters["sides"])
+                                          if system.parameters["cone"] == "paper" else 1.0)
+        force_bounds = self._force_bounds(b_eq)  # per-vertex big Ms, as tight as cheap LPs make them
+        big_f = float(force_bounds.max())
+        big_t = np.maximum(mu_c * force_bounds, 1e-9)
+        big_n, big_d = self._reach[:, 0], self._reach[:, 1] + self.min_slide
+        d_n, d_u, d_v = d[0::3], d[1::3], d[2::3]
+        vertices = np.arange(s)
+        rows = []  # (matrix over x, lower, upper)
+
+        def columns(block, offset):
+            block = sp.csr_matrix(block)
+            return sp.hstack([sp.csr_matrix((block.shape[0], offset)), block,
+                              sp.csr_matrix((block.shape[0], size - offset - block.shape[1]))], format="csr")
+
+        def select(offset, component, scale=1.0, stride=3):
+            # one row per vertex v: scale_v * x[offset + stride v + component]
+            return sp.csr_matrix((np.broadcast_to(scale, s), (vertices, offset + stride * vertices + component)),
+                                 shape=(s, size))
+
+        rows.append((columns(system.a_eq, of), b_eq, b_eq))
+        rows.append((columns(system.a_ub, of), -np.inf, 0.0))
+        rows.append((select(of, 0) - select(oz, 0, force_bounds, 1), -np.inf, 0.0))  # f_n <= M_v z
+        rows.append((columns(d_n, oq) + select(oz, 0, big_n, 1), -np.inf, big_n - 1.0))  # dd_n + 1 <= M_v (1 - z)
+        angles = 2.0 * math.pi * np.arange(sectors + 1) / sectors
+        edge = np.column_stack([np.cos(angles), np.sin(angles)])
+        middle = np.column_stack([np.cos(angles[:-1] + math.pi / sectors), np.sin(angles[:-1] + math.pi / sectors)])
+        one_sector = sp.csr_matrix((np.ones(n_s), (np.repeat(vertices, sectors), os_ + np.arange(n_s))),
+                                   shape=(s, size))
+        rows.append((one_sector, -np.inf, 1.0))
+        no_sector = sp.diags(big_t) @ one_sector
+        for component in (1, 2):  # no sector, no friction
+            rows.append((select(of, component) - no_sector, -np.inf, 0.0))
+            rows.append((select(of, component) + no_sector, 0.0, np.inf))
+        for k in range(sectors):
+            a, b, g = edge[k], edge[k + 1], middle[k]
+            slide_a = columns(a[0] * d_v - a[1] * d_u, oq)  # a x dd_t >= 0 in the sector
+            slide_b = columns(b[1] * d_u - b[0] * d_v, oq)  # dd_t x b >= 0
+            force_a = select(of, 1, a[1]) - select(of, 2, a[0])  # a x (-f_t) >= 0
+            force_b = select(of, 2, b[0]) - select(of, 1, b[1])  # (-f_t) x b >= 0
+            along = columns(g[0] * d_u + g[1] * d_v, oq)  # g . dd_t >= min_slide
+            rows.append((slide_a - select(os_, k, big_d, sectors), -big_d, np.inf))
+            rows.append((slide_b - select(os_, k, big_d, sectors), -big_d, np.inf))
+            rows.append((force_a - select(os_, k, big_t, sectors), -big_t, np.inf))
+            rows.append((force_b - select(os_, k, big_t, sectors), -big_t, np.inf))
+            rows.append((along - select(os_, k, self.min_slide + big_d, sectors), -big_d, np.inf))
+        matrix = sp.vstack([r[0] for r in rows], format="csr")
+        lower = np.concatenate([np.broadcast_to(r[1], r[0].shape[0]) for r in rows])
+        upper = np.concatenate([np.broadcast_to(r[2], r[0].shape[0]) for r in rows])
+        low = np.concatenate([np.tile([0.0, -np.inf, -np.inf], s), np.full(n_q, -np.inf), np.zeros(n_z + n_s)])
+        high = np.concatenate([np.tile([big_f, np.inf, np.inf], s), np.full(n_q, np.inf), np.ones(n_z + n_s)])
+        motion_rows = columns(d, oq)  # |dd| <= eta, dd_n >= -eps
+        motion_low = np.tile([-1.0, -ratio, -ratio], s)
+        integrality = np.concatenate([np.zeros(n_f + n_q), np.ones(n_z + n_s)])
+        outcome = milp(np.zeros(size), integrality=integrality, bounds=Bounds(low, high),
+                       constraints=[LinearConstraint(matrix, lower, upper),
+                                    LinearConstraint(motion_rows, motion_low, np.full(3 * s, ratio))],
+                       options={"time_limit": time_limit, "presolve": True})
+        if outcome.status == 2:
+            return None
+        if outcome.x is None:
+            return f"HiGHS did not decide the MILP ({outcome.message})"
+        x = outcome.x
+        return x[of:of + n_f].reshape(-1, 3), x[oq:oq + n_q]
+
+    # --- exact checks -----------------------------------------------------------------------------------------
+
+    def _exact(self, b_eq, motion):
+        """Forces solving (11) for this motion (least ``sum f_n``), or ``None``: an LP in ``(f_n, alpha)``."""
+        system = self.system
+        dd = (self.kinematic @ motion).reshape(-1, 3)
+        closed = dd[:, 0] + 1.0 <= ACTIVE_TOL
+        slide = dd[:, 1:]
+        sliding = closed & (np.hypot(slide[:, 0], slide[:, 1]) > SLIDE_TOL)
+        if np.any(dd[:, 0] < -1.0 - 1e-6) or np.any(np.abs(dd) > self.ratio * (1 + 1e-6)):
+            return None
+        normal_columns = system.a_eq[:, 0::3][:, closed]
+        slide_columns = (-(system.a_eq[:, 1::3] @ sp.diags(slide[:, 0]))
+                         - (system.a_eq[:, 2::3] @ sp.diags(slide[:, 1])))[:, sliding]
+        a_eq = sp.hstack([normal_columns, slide_columns], format="csr")
+        sides = system.parameters["sides"]
+        bound = system.parameters["mu"] * (math.cos(math.pi / sides) if system.parameters["cone"] == "inner" else 1.0)
+        angles = 2.0 * math.pi * np.arange(sides) / sides
+        # per sliding vertex and side k: -bound f_n + alpha (-(cos a_k) dd_u - (sin a_k) dd_v) <= 0
+        n_closed, n_sliding = int(closed.sum()), int(sliding.sum())
+        position = np.cumsum(closed) - 1
+        rows, cols, vals = [], [], []
+        for number, v in enumerate(np.flatnonzero(sliding)):
+            for k in range(sides):
+                row = number * sides + k
+                rows += [row, row]
+                cols += [position[v], n_closed + number]
+                vals += [-bound, -(math.cos(angles[k]) * slide[v, 0] + math.sin(angles[k]) * slide[v, 1])]
+        a_ub = sp.csr_matrix((vals, (rows, cols)), shape=(n_sliding * sides, n_closed + n_sliding))
+        cost = np.concatenate([np.ones(n_closed), np.zeros(n_sliding)])
+        outcome = linprog(cost, A_ub=a_ub if n_sliding else None, b_ub=np.zeros(n_sliding * sides) if n_sliding else None,
+                          A_eq=a_eq, b_eq=b_eq, bounds=(0, None), method="highs")
+        if outcome.status != 0:
+            return None
+        forces = np.zeros((len(dd), 3))
+        forces[closed, 0] = outcome.x[:n_closed]
+        alpha = outcome.x[n_closed:]
+        forces[sliding, 1:] = -alpha[:, None] * slide[sliding]
+        return forces
+
+    def _realise(self, forces):
+        """A motion realising the MILP's forces exactly (LP in ``dq`` and ``beta``), or ``None``.
+
+        Loaded vertices close (``dd_n = -1``), the others may not overlap more;
+        friction vertices slide along ``-f_t``: ``dd_t = -beta f_t`` with
+        ``beta |f_t| >= min_slide``.
+        """
+        d = self.kinematic
+        scale = max(float(np.abs(forces).max(initial=0.0)), 1e-300)
+        loaded = forces[:, 0] > 1e-9 * scale
+        friction = np.hypot(forces[:, 1], forces[:, 2])
+        rubbing = loaded & (friction > 1e-9 * scale)
+        s, n_q = len(forces), d.shape[1]
+        n_b = int(rubbing.sum())
+        d_n, d_t = d[0::3], (d[1::3], d[2::3])
+        blocks_eq = [sp.hstack([d_n[loaded], sp.csr_matrix((int(loaded.sum()), n_b))])]
+        b_eq = [np.full(int(loaded.sum()), -1.0)]
+        which = np.flatnonzero(rubbing)
+        for component in (0, 1):
+            scaled = sp.csr_matrix((forces[which, 1 + component], (np.arange(n_b), np.arange(n_b))), shape=(n_b, n_b))
+            blocks_eq.append(sp.hstack([d_t[component][which], scaled]))  # dd_t + beta f_t = 0
+            b_eq.append(np.zeros(n_b))
+        blocks_eq.append(sp.hstack([d_t[0][~rubbing], sp.csr_matrix((int((~rubbing).sum()), n_b))]))
+        blocks_eq.append(sp.hstack([d_t[1][~rubbing], sp.csr_matrix((int((~rubbing).sum()), n_b))]))
+        b_eq += [np.zeros(int((~rubbing).sum()))] * 2
+        a_ub = sp.vstack([sp.hstack([-d, sp.csr_matrix((3 * s, n_b))]),
+                          sp.hstack([d, sp.csr_matrix((3 * s, n_b))])], format="csr")
+        b_ub = np.concatenate([np.tile([1.0, self.ratio, self.ratio], s), np.full(3 * s, self.ratio)])
+        low_beta = self.min_slide / friction[which]
+        bounds = [(None, None)] * n_q + [(lb, None) for lb in low_beta]
+        outcome = linprog(np.zeros(n_q + n_b), A_ub=a_ub, b_ub=b_ub, A_eq=sp.vstack(blocks_eq, format="csr"),
+                          b_eq=np.concatenate(b_eq), bounds=bounds, method="highs")
+        return outcome.x[:n_q] if outcome.status == 0 else None
+
+    def _polish(self, b_eq, forces, motion):
+        """Solve (11) locally from the MILP's point, with its closed vertices kept closed (SLSQP).
+
+        Unknowns ``(dq, f_n, alpha)`` on the closed set ``S``; friction is
+        ``f_t = -alpha dd_t`` exactly, so equilibrium is bilinear:
+        ``A_n f_n - sum_v alpha_v A_t,v T_v dq = b``.  The objective is the
+        paper's ``|f_n|^2 + |alpha|^2`` (7a)/(11).  Returns the motion, or ``None``.
+        """
+        system, d = self.system, self.kinematic
+        dd = (d @ motion).reshape(-1, 3)
+        closed = np.flatnonzero((dd[:, 0] + 1.0 <= 1e-4) | (forces[:, 0] > 1e-9))
+        if not len(closed) or len(closed) > POLISH_LIMIT:
+            return None
+        a = system.a_eq.toarray()
+        kin = d.toarray()
+        n_q, m = kin.shape[1], len(closed)
+        normal = a[:, 3 * closed]
+        tangential = [a[:, [3 * v + 1, 3 * v + 2]] @ kin[[3 * v + 1, 3 * v + 2]] for v in closed]  # M_v
+        sides = system.parameters["sides"]
+        bound = system.parameters["mu"] * (math.cos(math.pi / sides) if system.parameters["cone"] == "inner" else 1.0)
+        directions = np.column_stack([np.cos(2 * math.pi * np.arange(sides) / sides),
+                                      np.sin(2 * math.pi * np.arange(sides) / sides)])
+        slide_rows = [directions @ kin[[3 * v + 1, 3 * v + 2]] for v in closed]  # (sides, n_q): c_k . T_v
+        others = np.setdiff1d(np.arange(len(dd)), closed)
+
+        # dq = q0 + N y keeps the closed vertices closed (the rows are often dependent, which SLSQP cannot take)
+        closed_rows = kin[3 * closed]
+        q0 = motion + np.linalg.lstsq(closed_rows, -1.0 - closed_rows @ motion, rcond=None)[0]
+        basis = null_space(closed_rows)
+        n_y = basis.shape[1]
+        tangential_y = [mv @ basis for mv in tangential]
+        slide_y = [rows @ basis for rows in slide_rows]
+
+        def split(x):
+            return q0 + basis @ x[:n_y], x[n_y:n_y + m], x[n_y + m:]
+
+        def equilibrium(x):
+            q, fn, alpha = split(x)
+            return normal @ fn - sum(al * (mv @ q) for al, mv in zip(alpha, tangential)) - b_eq
+
+        def equilibrium_jacobian(x):
+            q, fn, alpha = split(x)
+            return np.hstack([-sum(al * my for al, my in zip(alpha, tangential_y)), normal,
+                              np.column_stack([-(mv @ q) for mv in tangential])])
+
+        def cone(x):  # bound f_n + alpha (c_k . T_v dq) >= 0
+            q, fn, alpha = split(x)
+            return np.concatenate([bound * fn[i] + alpha[i] * (slide_rows[i] @ q) for i in range(m)])
+
+        def cone_jacobian(x):
+            q, fn, alpha = split(x)
+            rows = np.zeros((m * sides, n_y + 2 * m))
+            for i in range(m):
+                block = slice(i * sides, (i + 1) * sides)
+                rows[block, :n_y] = alpha[i] * slide_y[i]
+                rows[block, n_y + i] = bound
+                rows[block, n_y + m + i] = slide_rows[i] @ q
+            return rows
+
+        motion_rows = np.vstack([kin[3 * others], kin, -kin])
+        motion_bounds = np.concatenate([np.full(len(others), -1.0), np.full(2 * len(kin), -self.ratio)])
+        motion_y = motion_rows @ basis
+        constraints = [
+            {"type": "eq", "fun": equilibrium, "jac": equilibrium_jacobian},
+            {"type": "ineq", "fun": cone, "jac": cone_jacobian},
+            {"type": "ineq", "fun": lambda x: motion_rows @ split(x)[0] - motion_bounds,
+             "jac": lambda x: np.hstack([motion_y, np.zeros((len(motion_rows), 2 * m))])},
+        ]
+        slide = np.hypot(dd[closed, 1], dd[closed, 2])
+        alpha0 = np.hypot(forces[closed, 1], forces[closed, 2]) / np.maximum(slide, 1e-3)
+        x0 = np.concatenate([basis.T @ (motion - q0), forces[closed, 0], alpha0])
+        bounds = [(None, None)] * n_y + [(0.0, None)] * (2 * m)
+        outcome = minimize(lambda x: float(x[n_y:] @ x[n_y:]), x0,
+                           jac=lambda x: np.concatenate([np.zeros(n_y), 2 * x[n_y:]]),
+                           method="SLSQP", bounds=bounds, constraints=constraints,
+                           options={"maxiter": POLISH_ITERATIONS, "ftol": 1e-12})
+        q = split(outcome.x)[0]
+        return q if np.all(np.isfinite(q)) else None
+
+    # --- the result -------------------------------------------------------------------------------------------
+
+    def _result(self, status, message, forces, motion, parameters, timings) -> CRAResult:
+        system = self.system
+        s, free = len(system.points), len(system.free)
+        eps_absolute = parameters["eps_absolute"]
+        if motion is None:
+            world_motion = np.full((free, 6), np.nan)
+            dd = np.full((s, 3), np.nan)
+        else:
+            twists = motion.reshape(-1, 6)
+            world_motion = np.hstack([twists[:, :3] * eps_absolute, twists[:, 3:] * eps_absolute / parameters["length"]])
+            dd = (self.kinematic @ motion).reshape(-1, 3)
+        closed = np.nan_to_num(dd[:, 0], nan=np.inf) + 1.0 <= ACTIVE_TOL
+        return CRAResult(status, forces if forces is not None else np.full((s, 3), np.nan), world_motion,
+                         system.free.copy(), closed, dd[:, 1:], system.points, system.vertex_contact, message,
+                         system.contacts, parameters, timings)
