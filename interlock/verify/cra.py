@@ -443,7 +443,8 @@ class _Problem:
         if outcome.status == 2:
             return None
         if outcome.x is None:
-            return f"HiGHS did not decide the MILP ({outcome.message})"
+            return (f"the exact route is too large for this model: HiGHS did not decide the MILP "
+                    f"({n_z + n_s} binaries) within time_limit = {time_limit:g} s ({outcome.message})")
         x = outcome.x
         return x[of:of + n_f].reshape(-1, 3), x[oq:oq + n_q]
 

@@ -98,7 +98,7 @@ def test_out_of_time_is_inconclusive_not_a_guess(shared_data):
     assembly, found = _model(shared_data, "A")
     result = cra(assembly, mu=0.84, contacts=found, time_limit=1e-3)
     assert result.status == "inconclusive" and result.stable is None
-    assert "did not decide" in result.message
+    assert "too large" in result.message and "did not decide" in result.message
 
 
 @settings(max_examples=8, deadline=None)
@@ -162,8 +162,11 @@ TABLE_2_CRA = {
     ("type-d", "x"): (13.0, 44.1), ("type-d", "y"): (41.3, 70.0), ("type-d", "xy30"): (14.9, 48.5),
 }
 TABLE_2_TOL = {0.20: 1.0, 0.84: 2.5}
-#: Cases run on every test run; the rest with INTERLOCK_SLOW=1 (each takes 20-120 s on 2 cores).
-TABLE_2_ALWAYS = {("type-a", "x", 0.20), ("type-c", "x", 0.84)}
+#: Where our exact solution differs from the paper beyond the tolerance: our angle (see the test below).
+TABLE_2_DIFFERS = {("type-a", "xy30", 0.84): 66.6}
+#: Cases run on every test run; the rest with INTERLOCK_SLOW=1 (each takes 2-130 s on 2 cores, about 20 min
+#: for all 24; measured 2026-11-22: 23 within tolerance, largest difference 1.4 deg, and the one above).
+TABLE_2_ALWAYS = {("type-b", "y", 0.20), ("type-c", "y", 0.84), ("type-d", "y", 0.84)}
 
 
 @pytest.mark.parametrize("mu", [0.20, 0.84])
@@ -173,7 +176,27 @@ def test_table_2_cra_critical_tilt(shared_data, model, axis, mu):
         pytest.skip("slow Table 2 case: run with INTERLOCK_SLOW=1")
     paper = TABLE_2_CRA[model, axis][0 if mu == 0.20 else 1]
     assembly, found = _model(shared_data, model)
-    assert critical_tilt(assembly, axis, mu, method="cra", contacts=found) == pytest.approx(paper, abs=TABLE_2_TOL[mu])
+    ours = critical_tilt(assembly, axis, mu, method="cra", contacts=found)
+    if (model, axis, mu) in TABLE_2_DIFFERS:
+        assert ours == pytest.approx(TABLE_2_DIFFERS[model, axis, mu], abs=0.3)
+        assert ours > paper + TABLE_2_TOL[mu]
+    else:
+        assert ours == pytest.approx(paper, abs=TABLE_2_TOL[mu])
+
+
+def test_type_a_about_xy30_twists_and_holds_beyond_the_paper(shared_data):
+    # DIFFERENCE FROM THE PAPER: type-a about xy30 at mu = 0.84 is 62.9 deg in Table 2 (3DEC 62.7); the exact
+    # solution of (11) holds to 66.6 deg.  At 65 deg the block slides along the groove while turning about x and
+    # z, closing 6 of its 8 contact vertices; the slides, and so the frictions, point differently at each
+    # vertex, and together they carry the load.  The turn needs slides up to eta = 100 eps (our default): with
+    # the paper's eta / eps = 10 the motion is not available and our answer there is "inconclusive", not stable.
+    assembly, found = _model(shared_data, "type-a")
+    gravity = tilted_gravity("xy30", 65.0)
+    twisted = cra(assembly, 0.84, gravity=gravity, contacts=found)
+    assert twisted.status == "stable"
+    _certificate_holds(assembly, twisted, gravity)
+    turn = twisted.motion[0, 3:] * twisted.parameters["length"] / twisted.parameters["eps_absolute"]
+    assert abs(turn[0]) > 1 and abs(turn[2]) > 1 and twisted.closed.sum() == 6
 
 
 def test_upstream_ratio_eta_over_eps_10_costs_a_degree_on_type_a(shared_data):
