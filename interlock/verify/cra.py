@@ -155,7 +155,8 @@ class CRAResult:
 def cra(assembly, mu: float, density: float = 1.0, gravity=(0.0, 0.0, -1.0), frame=None, cone: str = "paper",
         sides: int = DEFAULT_SIDES, eps: float = DEFAULT_EPS, eta: float = DEFAULT_ETA,
         sectors: int = DEFAULT_SECTORS, force_bound: float = DEFAULT_FORCE_BOUND,
-        min_slide: float = DEFAULT_MIN_SLIDE, time_limit: float = DEFAULT_TIME_LIMIT, contacts=None) -> CRAResult:
+        min_slide: float = DEFAULT_MIN_SLIDE, time_limit: float = DEFAULT_TIME_LIMIT, contacts=None,
+        backend: str = "milp") -> CRAResult:
     """Coupled rigid-block analysis: is there an equilibrium that a virtual motion realises? (CRA paper, (11)).
 
     Forces ``f`` at the contact vertices and a virtual motion ``dq`` of the
@@ -187,6 +188,11 @@ def cra(assembly, mu: float, density: float = 1.0, gravity=(0.0, 0.0, -1.0), fra
         Smallest slide of a friction-carrying vertex, as a fraction of ``eps``.
     time_limit : float
         Seconds per MILP; a MILP that runs out of time gives "inconclusive".
+    backend : {"milp", "compas_cra"}
+        "milp" decides as above.  "compas_cra" (the optional upstream package, for assemblies too
+        large for the MILP) asks its local solver for a motion and verifies it with the exact LP:
+        "stable" if the LP accepts it, otherwise "inconclusive" (a local solver that finds nothing
+        proves nothing).
 
     Returns
     -------
@@ -213,7 +219,12 @@ def cra(assembly, mu: float, density: float = 1.0, gravity=(0.0, 0.0, -1.0), fra
     (True, 'unstable')
     """
     problem = _Problem.build(assembly, mu, density, frame, cone, sides, eps, eta, force_bound, min_slide, contacts)
-    return problem.solve(_gravity(gravity), _sector_count(sectors), _positive("time_limit", time_limit))
+    gravity, sectors, time_limit = _gravity(gravity), _sector_count(sectors), _positive("time_limit", time_limit)
+    if backend == "compas_cra":
+        return problem.check_upstream(assembly, gravity)
+    if backend != "milp":
+        raise StabilityError(f"backend must be 'milp' or 'compas_cra', got {backend!r}")
+    return problem.solve(gravity, sectors, time_limit)
 
 
 def decider(assembly, mu: float, sectors: int = DEFAULT_SECTORS, time_limit: float = DEFAULT_TIME_LIMIT,
@@ -274,9 +285,7 @@ class _Problem:
 
     def solve(self, gravity: np.ndarray, sectors: int, time_limit: float, known=()) -> CRAResult:
         timings = {**self.system.timings, "milp": 0.0, "lp": 0.0}
-        load = np.outer(self.system.weights, gravity)
-        total = float(np.abs(load).sum()) or 1.0
-        b_eq = -np.hstack([load, self.system.arms]).ravel() / total
+        b_eq, total = self._right_hand_side(gravity)
         tried, message, status = [], "", "inconclusive"
         started = time.perf_counter()
         quick = self._from_rbe(gravity, b_eq, known)
@@ -336,6 +345,38 @@ class _Problem:
             if exact is not None:
                 return "stable", exact, motion, "equilibrium realised by a virtual motion (local repair)"
         return None
+
+    def _right_hand_side(self, gravity: np.ndarray):
+        """``-p / W`` of Eq. (7b) for this gravity, and the total weight ``W``."""
+        load = np.outer(self.system.weights, gravity)
+        total = float(np.abs(load).sum()) or 1.0
+        return -np.hstack([load, self.system.arms]).ravel() / total, total
+
+    def check_upstream(self, assembly, gravity: np.ndarray) -> CRAResult:
+        """Verify the motion of compas_cra's local solver with the exact LP (``backend="compas_cra"``)."""
+        from interlock.verify.cra_compas import upstream_motion
+
+        timings = {**self.system.timings, "milp": 0.0, "lp": 0.0}
+        started = time.perf_counter()
+        p = self.parameters
+        world = upstream_motion(assembly, p["mu"], gravity=gravity, density=p["density"], frame=p["frame"],
+                                eps=p["eps"], eta=p["eta"], contacts=self.system.contacts)
+        timings["compas_cra"] = time.perf_counter() - started
+        parameters = {**p, "sectors": [], "gravity": gravity.tolist(), "backend": "compas_cra"}
+        if world is None:
+            return self._result("inconclusive", "compas_cra's local solver found no solution (which proves "
+                                "nothing)", None, None, parameters, timings)
+        world = np.asarray(world, dtype=float).reshape(-1, 6)
+        motion = np.hstack([world[:, :3] / p["eps_absolute"], world[:, 3:] * p["length"] / p["eps_absolute"]]).ravel()
+        b_eq, total = self._right_hand_side(gravity)
+        started = time.perf_counter()
+        exact = self._exact(b_eq, motion)
+        timings["lp"] = time.perf_counter() - started
+        if exact is None:
+            return self._result("inconclusive", "compas_cra's motion does not realise an equilibrium exactly",
+                                None, None, parameters, timings)
+        return self._result("stable", "equilibrium realised by compas_cra's motion (verified exactly)",
+                            exact * total, motion, parameters, timings)
 
     # --- MILP relaxation --------------------------------------------------------------------------------------
 
