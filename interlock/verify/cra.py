@@ -72,10 +72,12 @@ DEFAULT_MIN_SLIDE = 1e-3
 #: A vertex is closed when ``dd_n + eps <= ACTIVE_TOL * eps``; it slides when ``|dd_t| > SLIDE_TOL * eps``.
 ACTIVE_TOL = 1e-7
 SLIDE_TOL = 1e-7
+#: Vertices within ``SNAP_TOL * eps`` of closed in a local solver's motion are snapped shut before checking.
+SNAP_TOL = 1e-2
 #: Seconds HiGHS may spend on one MILP before the answer is "inconclusive".
 DEFAULT_TIME_LIMIT = 60.0
 #: Most closed vertices for the local (SLSQP) repair of a MILP point; beyond, only the LP repairs run.
-POLISH_LIMIT = 400
+POLISH_LIMIT = 100
 POLISH_ITERATIONS = 50
 #: Motions of earlier stable loads that :func:`decider` tries first.
 WARM_STARTS = 3
@@ -354,29 +356,62 @@ class _Problem:
 
     def check_upstream(self, assembly, gravity: np.ndarray) -> CRAResult:
         """Verify the motion of compas_cra's local solver with the exact LP (``backend="compas_cra"``)."""
-        from interlock.verify.cra_compas import upstream_motion
+        from interlock.verify.cra_compas import upstream_solution
 
         timings = {**self.system.timings, "milp": 0.0, "lp": 0.0}
         started = time.perf_counter()
         p = self.parameters
-        world = upstream_motion(assembly, p["mu"], gravity=gravity, density=p["density"], frame=p["frame"],
-                                eps=p["eps"], eta=p["eta"], contacts=self.system.contacts)
+        solution = upstream_solution(assembly, p["mu"], gravity=gravity, density=p["density"], frame=p["frame"],
+                                     eps=p["eps"], eta=p["eta"], contacts=self.system.contacts)
         timings["compas_cra"] = time.perf_counter() - started
         parameters = {**p, "sectors": [], "gravity": gravity.tolist(), "backend": "compas_cra"}
-        if world is None:
+        if solution is None:
             return self._result("inconclusive", "compas_cra's local solver found no solution (which proves "
                                 "nothing)", None, None, parameters, timings)
-        world = np.asarray(world, dtype=float).reshape(-1, 6)
+        world, upstream_forces = (np.asarray(part, dtype=float) for part in solution)
+        world = world.reshape(-1, 6)
         motion = np.hstack([world[:, :3] / p["eps_absolute"], world[:, 3:] * p["length"] / p["eps_absolute"]]).ravel()
         b_eq, total = self._right_hand_side(gravity)
         started = time.perf_counter()
-        exact = self._exact(b_eq, motion)
+        exact = None
+        # an interior-point solution closes its contacts only nearly: snap them shut, or realise its forces
+        dd = (self.kinematic @ motion).reshape(-1, 3)
+        near_forces = np.where((dd[:, 0] + 1.0 <= SNAP_TOL)[:, None], upstream_forces, 0.0)
+        snapped = self._snap(motion)
+        for candidate in (lambda: motion, lambda: snapped, lambda: self._realise(upstream_forces),
+                          lambda: self._polish(b_eq, near_forces, motion if snapped is None else snapped)):
+            tried = candidate()
+            exact = None if tried is None else self._exact(b_eq, tried)
+            if exact is not None:
+                motion = tried
+                break
         timings["lp"] = time.perf_counter() - started
         if exact is None:
             return self._result("inconclusive", "compas_cra's motion does not realise an equilibrium exactly",
                                 None, None, parameters, timings)
         return self._result("stable", "equilibrium realised by compas_cra's motion (verified exactly)",
                             exact * total, motion, parameters, timings)
+
+    def _snap(self, motion, tolerance: float = SNAP_TOL):
+        """The motion nearest (L1) to ``motion`` that closes exactly the vertices it nearly closes
+        (``dd_n + eps <= tolerance * eps``) and keeps the others open; ``None`` if there is none."""
+        d = self.kinematic
+        dd = (d @ motion).reshape(-1, 3)
+        near = dd[:, 0] + 1.0 <= tolerance
+        if not near.any():
+            return None
+        n_q = d.shape[1]
+        identity = sp.eye(n_q, format="csr")
+        # unknowns (q, r) with |q - motion| <= r, minimise sum r
+        a_ub = sp.vstack([sp.hstack([identity, -identity]), sp.hstack([-identity, -identity]),
+                          sp.hstack([d, sp.csr_matrix((d.shape[0], n_q))]),
+                          sp.hstack([-d, sp.csr_matrix((d.shape[0], n_q))])], format="csr")
+        s = len(dd)
+        b_ub = np.concatenate([motion, -motion, np.full(3 * s, self.ratio), np.tile([1.0, self.ratio, self.ratio], s)])
+        a_eq = sp.hstack([d[0::3][near], sp.csr_matrix((int(near.sum()), n_q))], format="csr")
+        outcome = linprog(np.concatenate([np.zeros(n_q), np.ones(n_q)]), A_ub=a_ub, b_ub=b_ub, A_eq=a_eq,
+                          b_eq=np.full(int(near.sum()), -1.0), bounds=(None, None), method="highs")
+        return outcome.x[:n_q] if outcome.status == 0 else None
 
     # --- MILP relaxation --------------------------------------------------------------------------------------
 
@@ -498,7 +533,7 @@ class _Problem:
         closed = dd[:, 0] + 1.0 <= ACTIVE_TOL
         slide = dd[:, 1:]
         sliding = closed & (np.hypot(slide[:, 0], slide[:, 1]) > SLIDE_TOL)
-        if np.any(dd[:, 0] < -1.0 - 1e-6) or np.any(np.abs(dd) > self.ratio * (1 + 1e-6)):
+        if np.any(dd[:, 0] < -1.0 - 1e-6) or np.any(np.abs(dd) > self.ratio * (1 + 1e-6)) or not closed.any():
             return None
         normal_columns = system.a_eq[:, 0::3][:, closed]
         slide_columns = (-(system.a_eq[:, 1::3] @ sp.diags(slide[:, 0]))

@@ -225,6 +225,26 @@ def test_bad_input_raises(kwargs, message):
         cra(_stack(), **kwargs)
 
 
+def test_unknown_backend_raises():
+    with pytest.raises(InterlockError, match="backend must be 'milp' or 'compas_cra'"):
+        cra(_stack(), mu=0.5, backend="ipopt")
+
+
+def test_compas_cra_backend_without_the_package_says_how_to_install(monkeypatch):
+    import builtins
+
+    real_import = builtins.__import__
+
+    def no_compas_cra(name, *args, **kwargs):
+        if name.startswith("compas_cra"):
+            raise ImportError(name)
+        return real_import(name, *args, **kwargs)
+
+    monkeypatch.setattr(builtins, "__import__", no_compas_cra)
+    with pytest.raises(InterlockError, match="pip install compas_cra"):
+        cra(_stack(), mu=0.5, backend="compas_cra")
+
+
 def test_no_frame_raises():
     with pytest.raises(InterlockError, match="no frame"):
         cra(_stack().with_frame([]), mu=0.5)
