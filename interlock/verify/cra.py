@@ -14,10 +14,14 @@ where ``dd = A_eq^T dq`` (Eq. (8)) are the relative displacements at the
 contact vertices.  The paper solves (11) locally with IPOPT; here it is
 decided globally:
 
+0. **Quick answers.**  No RBE equilibrium means "unstable" (CRA only removes
+   solutions).  A motion that realises RBE's least-force equilibrium exactly
+   (an LP), or the motion of a nearby load (:func:`decider`), means "stable".
 1. **MILP relaxation.**  A binary per vertex switches Eq. (10); binaries over
    ``sectors`` angular sectors of the contact plane put the slide ``dd_t``
    and the reversed friction ``-f_t`` in the same sector, with a slide of at
-   least ``min_slide`` along the sector's bisector where there is friction.
+   least ``min_slide`` along the sector's bisector where there is friction;
+   the big Ms are per vertex (the largest RBE ``f_n``, the reach of the motion).
    Every solution of (11) whose forces stay below ``force_bound`` and whose
    friction vertices slide at least that much is a solution of the MILP, so
    an infeasible MILP proves "unstable" (HiGHS through :func:`scipy.optimize.milp`).
