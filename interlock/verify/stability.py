@@ -25,6 +25,8 @@ TILT_AXES = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "xy30": (math.sqrt(3.0)
 CONES = ("paper", "inner")
 #: Sides of the friction pyramid (App. B: eight).
 DEFAULT_SIDES = 8
+#: Above this many force unknowns the LP goes to Clarabel (interior point) first, HiGHS if it does not decide.
+LARGE_LP = 5000
 #: Coarse step (degrees) of the tilt scan before bisection, and the bisection tolerance (degrees).
 DEFAULT_TILT_STEP = 5.0
 DEFAULT_TILT_TOL = 0.1
@@ -157,7 +159,8 @@ def rbe(assembly: Assembly, mu: float, density: float = 1.0, gravity=(0.0, 0.0, 
     Notes
     -----
     One sparse LP with ``3 s`` unknowns, ``6 (free blocks)`` equalities and
-    ``sides * s`` inequalities for ``s`` contact vertices, solved by HiGHS.
+    ``sides * s`` inequalities for ``s`` contact vertices, solved by HiGHS
+    (by Clarabel first above :data:`LARGE_LP` unknowns).
     Lengths are divided by the model size and loads by the total weight.
 
     Examples
@@ -335,6 +338,10 @@ class _System:
         if not self.a_eq.shape[1]:
             solved = bool(np.allclose(b_eq, 0.0))
             return None, (0 if solved else 2), ("no contact forces" if solved else "no contacts carry the load"), total
+        if self.a_eq.shape[1] > LARGE_LP:
+            decided = self._clarabel(b_eq, least_force)
+            if decided is not None:
+                return (*decided, total)
         attempts = [(self.cost, "highs"), (self.cost, "highs-ipm")] if least_force else []
         attempts.append((np.zeros_like(self.cost), "highs"))
         for cost, method in attempts:
@@ -343,6 +350,31 @@ class _System:
             if outcome.status in (0, 2):
                 return outcome.x, int(outcome.status), str(outcome.message), total
         raise StabilityError(f"HiGHS did not decide the RBE problem (status {outcome.status}: {outcome.message})")
+
+    def _clarabel(self, b_eq, least_force: bool):
+        """The same LP by Clarabel's interior point (large models: the armadillo's 31,000 unknowns in 0.7 s
+        against 40 s for HiGHS' simplex); ``(x, status, message)``, or ``None`` when it does not decide."""
+        import clarabel
+
+        from interlock.verify.check import SOLVER_THREADS
+
+        n = self.a_eq.shape[1]
+        normal = np.flatnonzero(self.bounds[:, 0] == 0.0)
+        nonnegative = sp.csr_matrix((-np.ones(len(normal)), (np.arange(len(normal)), normal)), shape=(len(normal), n))
+        constraints = sp.vstack([self.a_eq, self.a_ub, nonnegative], format="csc")
+        right = np.concatenate([b_eq, np.zeros(self.a_ub.shape[0] + len(normal))])
+        settings = clarabel.DefaultSettings()
+        settings.verbose = False
+        settings.max_threads = SOLVER_THREADS
+        cones = [clarabel.ZeroConeT(self.a_eq.shape[0]), clarabel.NonnegativeConeT(self.a_ub.shape[0] + len(normal))]
+        cost = self.cost if least_force else np.zeros(n)
+        solution = clarabel.DefaultSolver(sp.csc_matrix((n, n)), cost, constraints, right, cones, settings).solve()
+        status = str(solution.status)
+        if status == "Solved":
+            return np.asarray(solution.x), 0, "Clarabel: solved"
+        if status == "PrimalInfeasible":
+            return None, 2, "Clarabel: infeasible (no equilibrium)"
+        return None
 
     def feasible(self, gravity: np.ndarray) -> bool:
         return self._linprog(gravity, least_force=False)[1] == 0

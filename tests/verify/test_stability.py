@@ -238,3 +238,33 @@ def test_equilibrium_matrix_normal_columns_are_the_interlocking_matrix_transpose
     normal_columns = _System.build(assembly, 0.5, 1.0, None, "paper", 8, None).a_eq.toarray()[:, 0::3]
     swap = np.r_[3:6, 0:3, 9:12, 6:9]
     assert np.allclose(normal_columns, kinematic.T[swap])
+
+
+# --- large models: Clarabel --------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("angle", [0.0, 30.0, 60.0, 120.0])
+def test_clarabel_path_agrees_with_highs(shared_data, monkeypatch, angle):
+    import interlock.verify.stability as stability
+
+    assembly = load_compas(shared_data / "compas_cra" / "type-c.json")
+    found = contacts(assembly)
+    gravity = tilted_gravity("xy30", angle)
+    expected = rbe(assembly, 0.84, gravity=gravity, contacts=found)
+    monkeypatch.setattr(stability, "LARGE_LP", 0)
+    large = rbe(assembly, 0.84, gravity=gravity, contacts=found)
+    assert large.stable == expected.stable and large.message.startswith("Clarabel")
+    if large.stable:
+        assert large.resultants.sum(axis=0) == pytest.approx(expected.resultants.sum(axis=0), abs=1e-6)
+
+
+def test_armadillo_vault_stands_with_upstream_contacts(shared_data):
+    # 399 blocks, 33 supports; contacts as compas_assembly finds them (tmax = 0.05, amin = 1e-4, any angle)
+    vault = load_compas(shared_data / "compas_cra" / "armadillo.json")
+    found = contacts(vault, gap=0.05 / vault.scale, area_rtol=1e-4 / vault.scale**2, angle_tol=0.2)
+    result = rbe(vault, mu=0.84, contacts=found)
+    assert result.stable and result.message.startswith("Clarabel")
+    weight = vault.volumes[[b for b in range(len(vault)) if b not in vault.frame]].sum()
+    on_supports = [k for k, c in enumerate(result.contacts) if (c.i in vault.frame) != (c.j in vault.frame)]
+    vertical = sum(result.resultants[k, 2] * (1 if result.contacts[k].j not in vault.frame else -1) for k in on_supports)
+    assert vertical == pytest.approx(weight, rel=1e-6)  # the supports carry the whole weight
