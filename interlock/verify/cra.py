@@ -573,7 +573,7 @@ class _Problem:
 
         Loaded vertices close (``dd_n = -1``), the others may not overlap more;
         friction vertices slide along ``-f_t``: ``dd_t = -beta f_t`` with
-        ``beta |f_t| >= min_slide``.
+        ``beta |f_t| >= min_slide``; vertices without friction may slide freely (``alpha = 0``).
         """
         d = self.kinematic
         scale = max(float(np.abs(forces).max(initial=0.0)), 1e-300)
@@ -590,9 +590,6 @@ class _Problem:
             scaled = sp.csr_matrix((forces[which, 1 + component], (np.arange(n_b), np.arange(n_b))), shape=(n_b, n_b))
             blocks_eq.append(sp.hstack([d_t[component][which], scaled]))  # dd_t + beta f_t = 0
             b_eq.append(np.zeros(n_b))
-        blocks_eq.append(sp.hstack([d_t[0][~rubbing], sp.csr_matrix((int((~rubbing).sum()), n_b))]))
-        blocks_eq.append(sp.hstack([d_t[1][~rubbing], sp.csr_matrix((int((~rubbing).sum()), n_b))]))
-        b_eq += [np.zeros(int((~rubbing).sum()))] * 2
         a_ub = sp.vstack([sp.hstack([-d, sp.csr_matrix((3 * s, n_b))]),
                           sp.hstack([d, sp.csr_matrix((3 * s, n_b))])], format="csr")
         b_ub = np.concatenate([np.tile([1.0, self.ratio, self.ratio], s), np.full(3 * s, self.ratio)])

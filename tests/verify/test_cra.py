@@ -16,17 +16,10 @@ from interlock.errors import InterlockError
 from interlock.verify import contacts
 from interlock.verify.cra import cra
 from interlock.verify.stability import _System, critical_tilt, rbe, tilted_gravity
+from tests.verify.test_stability import TABLE_2_TOL, _stack
 
 TOL = 0.1  # critical_tilt's bisection tolerance, degrees
 SLOW = os.environ.get("INTERLOCK_SLOW") == "1"
-
-
-def _stack(heights=(1.0, 1.0)):
-    boxes, z = [], 0.0
-    for h in heights:
-        boxes.append(trimesh.creation.box(bounds=[[0, 0, z], [1, 1, z + h]]))
-        z += h
-    return Assembly.from_meshes(boxes, frame=[0])
 
 
 def _model(shared_data, name):
@@ -161,7 +154,6 @@ TABLE_2_CRA = {
     ("type-c", "x"): (13.0, 44.1), ("type-c", "y"): (41.3, 64.4), ("type-c", "xy30"): (14.9, 40.2),
     ("type-d", "x"): (13.0, 44.1), ("type-d", "y"): (41.3, 70.0), ("type-d", "xy30"): (14.9, 48.5),
 }
-TABLE_2_TOL = {0.20: 1.0, 0.84: 2.5}
 #: Where our exact solution differs from the paper beyond the tolerance: our angle (see the test below).
 TABLE_2_DIFFERS = {("type-a", "xy30", 0.84): 66.6}
 #: Cases run on every test run; the rest with INTERLOCK_SLOW=1 (each takes 2-130 s on 2 cores, about 20 min
