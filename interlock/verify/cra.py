@@ -462,8 +462,7 @@ class _Problem:
         size = n_f + n_q + n_z + n_s
         of, oq, oz, os_ = 0, n_f, n_f + n_q, n_f + n_q + n_z
         ratio = self.ratio
-        mu_c = system.parameters["mu"] / (math.cos(math.pi / system.parameters["sides"])
-                                          if system.parameters["cone"] == "paper" else 1.0)
+        mu_c = -system.cone_rows[0, 0] / math.cos(math.pi / len(system.cone_rows))  # the pyramid's widest |f_t| / f_n
         force_bounds = self._force_bounds(b_eq)  # per-vertex big Ms, as tight as cheap LPs make them
         big_f = float(force_bounds.max())
         big_t = np.maximum(mu_c * force_bounds, 1e-9)
@@ -543,22 +542,21 @@ class _Problem:
         slide_columns = (-(system.a_eq[:, 1::3] @ sp.diags(slide[:, 0]))
                          - (system.a_eq[:, 2::3] @ sp.diags(slide[:, 1])))[:, sliding]
         a_eq = sp.hstack([normal_columns, slide_columns], format="csr")
-        sides = system.parameters["sides"]
-        bound = system.parameters["mu"] * (math.cos(math.pi / sides) if system.parameters["cone"] == "inner" else 1.0)
-        angles = 2.0 * math.pi * np.arange(sides) / sides
-        # per sliding vertex and side k: -bound f_n + alpha (-(cos a_k) dd_u - (sin a_k) dd_v) <= 0
+        # per sliding vertex and cone row k: -m f_n + alpha (-(cos a_k) dd_u - (sin a_k) dd_v) <= 0
+        cone_rows = system.cone_rows
+        sides = len(cone_rows)
         n_closed, n_sliding = int(closed.sum()), int(sliding.sum())
-        position = np.cumsum(closed) - 1
-        rows, cols, vals = [], [], []
-        for number, v in enumerate(np.flatnonzero(sliding)):
-            for k in range(sides):
-                row = number * sides + k
-                rows += [row, row]
-                cols += [position[v], n_closed + number]
-                vals += [-bound, -(math.cos(angles[k]) * slide[v, 0] + math.sin(angles[k]) * slide[v, 1])]
-        a_ub = sp.csr_matrix((vals, (rows, cols)), shape=(n_sliding * sides, n_closed + n_sliding))
+        which = np.flatnonzero(sliding)
+        row = np.arange(n_sliding * sides)
+        column_of_normal = np.repeat((np.cumsum(closed) - 1)[which], sides)
+        normal_part = sp.csr_matrix((np.tile(cone_rows[:, 0], n_sliding), (row, column_of_normal)),
+                                    shape=(len(row), n_closed))
+        alpha_values = -(slide[which] @ cone_rows[:, 1:].T).ravel()
+        alpha_part = sp.csr_matrix((alpha_values, (row, np.repeat(np.arange(n_sliding), sides))),
+                                   shape=(len(row), n_sliding))
+        a_ub = sp.hstack([normal_part, alpha_part], format="csr")
         cost = np.concatenate([np.ones(n_closed), np.zeros(n_sliding)])
-        outcome = linprog(cost, A_ub=a_ub if n_sliding else None, b_ub=np.zeros(n_sliding * sides) if n_sliding else None,
+        outcome = linprog(cost, A_ub=a_ub, b_ub=np.zeros(a_ub.shape[0]),
                           A_eq=a_eq, b_eq=b_eq, bounds=(0, None), method="highs")
         if outcome.status != 0:
             return None
@@ -617,11 +615,8 @@ class _Problem:
         n_q, m = kin.shape[1], len(closed)
         normal = a[:, 3 * closed]
         tangential = [a[:, [3 * v + 1, 3 * v + 2]] @ kin[[3 * v + 1, 3 * v + 2]] for v in closed]  # M_v
-        sides = system.parameters["sides"]
-        bound = system.parameters["mu"] * (math.cos(math.pi / sides) if system.parameters["cone"] == "inner" else 1.0)
-        directions = np.column_stack([np.cos(2 * math.pi * np.arange(sides) / sides),
-                                      np.sin(2 * math.pi * np.arange(sides) / sides)])
-        slide_rows = [directions @ kin[[3 * v + 1, 3 * v + 2]] for v in closed]  # (sides, n_q): c_k . T_v
+        sides, bound = len(system.cone_rows), -system.cone_rows[0, 0]
+        slide_rows = [system.cone_rows[:, 1:] @ kin[[3 * v + 1, 3 * v + 2]] for v in closed]  # (sides, n_q): c_k . T_v
         others = np.setdiff1d(np.arange(len(dd)), closed)
 
         # dq = q0 + N y keeps the closed vertices closed (the rows are often dependent, which SLSQP cannot take)
@@ -689,7 +684,7 @@ class _Problem:
             dd = np.full((s, 3), np.nan)
         else:
             twists = motion.reshape(-1, 6)
-            world_motion = np.hstack([twists[:, :3] * eps_absolute, twists[:, 3:] * eps_absolute / parameters["length"]])
+            world_motion = np.hstack([twists[:, :3], twists[:, 3:] / parameters["length"]]) * eps_absolute
             dd = (self.kinematic @ motion).reshape(-1, 3)
         closed = np.nan_to_num(dd[:, 0], nan=np.inf) + 1.0 <= ACTIVE_TOL
         return CRAResult(status, forces if forces is not None else np.full((s, 3), np.nan), world_motion,

@@ -272,6 +272,7 @@ class _System:
 
     a_eq: sp.csr_matrix
     a_ub: sp.csr_matrix
+    cone_rows: np.ndarray  # _friction_block(mu, cone, sides): one vertex's rows of a_ub
     cost: np.ndarray
     bounds: np.ndarray
     weights: np.ndarray
@@ -310,8 +311,8 @@ class _System:
         frames = np.array([[c.normal, c.basis[0], c.basis[1]] for c in used]).reshape(-1, 3, 3)[vertex_contact]
         length = assembly.scale
         a_eq = _equilibrium_matrix(assembly, used, vertex_contact, points, frames, column_of, length)
-        bound = mu * (math.cos(math.pi / sides) if cone == "inner" else 1.0)
-        a_ub = _friction_matrix(len(points), sides, bound)
+        cone_rows = _friction_block(mu, cone, sides)
+        a_ub = _friction_matrix(len(points), cone_rows)
         weights = density[free] * assembly.volumes[free]
         arms = np.zeros((len(free), 3))  # weight acts at the centroid: no moment about it
         bounds = np.tile([[0.0, np.inf], [-np.inf, np.inf], [-np.inf, np.inf]], (len(points), 1))
@@ -322,7 +323,7 @@ class _System:
                       "density": float(density[0]) if uniform and len(density) else density.tolist(),
                       "frame": list(fixed)}
         timings = {"contacts": found_at - started, "build": built - found_at}
-        return cls(a_eq, a_ub, cost, bounds, weights, arms, free, frames, points, vertex_contact, used,
+        return cls(a_eq, a_ub, cone_rows, cost, bounds, weights, arms, free, frames, points, vertex_contact, used,
                    parameters, timings)
 
     def _linprog(self, gravity: np.ndarray, least_force: bool):
@@ -432,11 +433,21 @@ def _equilibrium_matrix(assembly, used, vertex_contact, points, frames, column_o
     return matrix
 
 
-def _friction_matrix(count: int, sides: int, bound: float) -> sp.csr_matrix:
-    """``A_fr`` (Eq. (5), App. B): per vertex ``-bound f_n + cos(a_k) f_u + sin(a_k) f_v <= 0``."""
+def _friction_block(mu: float, cone: str, sides: int) -> np.ndarray:
+    """The rows ``(-m, cos a_k, sin a_k)`` of one vertex's linearised cone (Eq. (5), App. B), ``(sides, 3)``.
+
+    ``block @ (f_n, f_u, f_v) <= 0`` with ``a_k = 2 pi k / sides``, ``m = mu`` for the
+    circumscribed ("paper") pyramid and ``m = mu cos(pi / sides)`` for the inscribed ("inner") one.
+    """
+    bound = mu * (math.cos(math.pi / sides) if cone == "inner" else 1.0)
     angles = 2.0 * math.pi * np.arange(sides) / sides
     block = np.column_stack([np.full(sides, -bound), np.cos(angles), np.sin(angles)])
     block[np.abs(block) < 1e-15] = 0.0
+    return block
+
+
+def _friction_matrix(count: int, block: np.ndarray) -> sp.csr_matrix:
+    """``A_fr`` (Eq. (5), App. B): ``block`` (:func:`_friction_block`) once per vertex."""
     return sp.kron(sp.eye(count, format="csr"), sp.csr_matrix(block), format="csr")
 
 
