@@ -247,8 +247,7 @@ def decider(assembly, mu: float, sectors: int = DEFAULT_SECTORS, time_limit: flo
     def stable(gravity) -> bool | None:
         result = problem.solve(_gravity(gravity), sectors, time_limit, known)
         if result.stable:
-            eps, length = result.parameters["eps_absolute"], result.parameters["length"]
-            known.insert(0, np.hstack([result.motion[:, :3] / eps, result.motion[:, 3:] * length / eps]).ravel())
+            known.insert(0, problem.internal_motion(result.motion))
             del known[WARM_STARTS:]
         return result.stable
 
@@ -352,6 +351,12 @@ class _Problem:
                 return "stable", exact, motion, "equilibrium realised by a virtual motion (local repair)"
         return None
 
+    def internal_motion(self, world: np.ndarray) -> np.ndarray:
+        """World twists ``(t, omega)`` per free block (as in :attr:`CRAResult.motion`) in the solver's units:
+        lengths over ``eps``, rotations times the model size over ``eps``, flattened."""
+        eps, length = self.parameters["eps_absolute"], self.parameters["length"]
+        return np.hstack([world[:, :3], world[:, 3:] * length]).ravel() / eps
+
     def _right_hand_side(self, gravity: np.ndarray):
         """``-p / W`` of Eq. (7b) for this gravity, and the total weight ``W``."""
         load = np.outer(self.system.weights, gravity)
@@ -374,7 +379,7 @@ class _Problem:
                                 "nothing)", None, None, parameters, timings)
         world, upstream_forces = (np.asarray(part, dtype=float) for part in solution)
         world = world.reshape(-1, 6)
-        motion = np.hstack([world[:, :3] / p["eps_absolute"], world[:, 3:] * p["length"] / p["eps_absolute"]]).ravel()
+        motion = self.internal_motion(world)
         b_eq, total = self._right_hand_side(gravity)
         started = time.perf_counter()
         exact = None
