@@ -22,9 +22,15 @@ decided globally:
    and the reversed friction ``-f_t`` in the same sector, with a slide of at
    least ``min_slide`` along the sector's bisector where there is friction;
    the big Ms are per vertex (the largest RBE ``f_n``, the reach of the motion).
-   Every solution of (11) whose forces stay below ``force_bound`` and whose
-   friction vertices slide at least that much is a solution of the MILP, so
-   an infeasible MILP proves "unstable" (HiGHS through :func:`scipy.optimize.milp`).
+   Virtual work bounds the forces: for a solution of (11), ``f . dd = b . q``
+   with ``f_n dd_n = -eps f_n`` and ``f_t . dd_t = -alpha |dd_t|^2``, so
+   ``sum f_n <= -b . q / eps``, at most the work the load can do on any
+   allowed motion (an LP); this row and the bound are in the MILP, beside face cuts
+   (closed vertices span a face of a convex contact polygon).
+   Every solution of (11) whose friction vertices slide at least ``min_slide``
+   (and, if ``force_bound`` is below the virtual-work bound, whose forces stay
+   below it) is a solution of the MILP, so an infeasible MILP proves "unstable"
+   (HiGHS through :func:`scipy.optimize.milp`).
 2. **Exact check.**  A feasible MILP gives a motion.  With the motion fixed,
    (11) is linear in ``(f_n, alpha)``: an LP over exactly the contacts it
    closes and the slides it makes.  A feasible LP is a solution of (11):
@@ -48,6 +54,7 @@ from functools import cached_property
 
 import numpy as np
 import scipy.sparse as sp
+import shapely
 from scipy.linalg import null_space
 from scipy.optimize import Bounds, LinearConstraint, linprog, milp, minimize
 
@@ -189,7 +196,9 @@ def cra(assembly, mu: float, density: float = 1.0, gravity=(0.0, 0.0, -1.0), fra
     sectors : int
         Angular sectors (``>= 3``) of the first MILP; :data:`REFINED_SECTORS` follow if needed.
     force_bound : float
-        Largest vertex normal force in units of the free blocks' total weight (the MILP's big M).
+        Largest vertex normal force in units of the free blocks' total weight.  The MILP's big M is
+        the smaller of this and the virtual-work bound (the work the load can do on any allowed
+        motion, which (11) implies), so with the default the bound rarely matters.
     min_slide : float
         Smallest slide of a friction-carrying vertex, as a fraction of ``eps``.
     time_limit : float
@@ -441,24 +450,69 @@ class _Problem:
         largest = largest.reshape(-1, 3) * (1 + 1e-6) + 1e-9
         return np.column_stack([largest[:, 0] + 1.0, np.hypot(largest[:, 1], largest[:, 2])])
 
+    @cached_property
+    def _diagonals(self) -> np.ndarray:
+        """Rows ``(a, c, b)`` of vertex indices with ``z_a + z_c - z_b <= 1``: the MILP's face cuts.
+
+        ``dd_n`` is affine over a contact polygon and ``>= -eps`` at its
+        vertices, so the vertices where it equals ``-eps`` span a face of the
+        polygon (a vertex, an edge or all of it) when the polygon is convex.
+        Two closed vertices whose diagonal crosses the interior close them all.
+        """
+        triples, start = [], 0
+        for contact in self.system.contacts:
+            count, polygon = len(contact.vertices), contact.polygon
+            convex = not polygon.interiors and abs(polygon.convex_hull.area - polygon.area) <= 1e-9 * polygon.area
+            if convex and count >= 4:
+                ring = (contact.vertices - contact.origin) @ contact.basis.T
+                inner = polygon.buffer(-1e-6 * math.sqrt(polygon.area))
+                for a in range(count):
+                    for c in range(a + 2, count - (a == 0)):
+                        if inner.contains(shapely.Point((ring[a] + ring[c]) / 2)):
+                            triples += [(start + a, start + c, start + b) for b in range(count) if b not in (a, c)]
+            start += count
+        return np.array(triples, dtype=int).reshape(-1, 3)
+
+    def _work_bound(self, b_eq) -> float:
+        """The most work ``-b.q`` the load can do on an allowed motion (``dd_n >= -eps``, ``|dd| <= eta``).
+
+        By virtual work, ``-b.q = sum f_n + sum alpha |dd_t|^2`` (eps = 1) for
+        every solution of (11), so this bounds the sum of its normal forces.
+        """
+        d = self.kinematic
+        s = d.shape[0] // 3
+        outcome = linprog(b_eq, A_ub=sp.vstack([d, -d], format="csr"),
+                          b_ub=np.concatenate([np.full(3 * s, self.ratio), np.tile([1.0, self.ratio, self.ratio], s)]),
+                          bounds=(None, None), method="highs")
+        return -outcome.fun * (1 + 1e-6) + 1e-9 if outcome.status == 0 else np.inf
+
     def _force_bounds(self, b_eq):
-        """Per vertex, the largest ``f_n`` of any RBE equilibrium, capped at ``force_bound`` (the MILP's big M)."""
+        """Per vertex, the largest ``f_n`` of any RBE equilibrium whose normal forces sum to at most
+        :meth:`_work_bound`, capped at ``force_bound`` (the MILP's big M)."""
         system = self.system
         s = len(system.points)
-        bounds = np.full(s, self.force_bound)
+        cap = min(self.force_bound, self._work_bound(b_eq))
+        bounds = np.full(s, cap)
         box = system.bounds.copy()
-        box[0::3, 1] = self.force_bound
+        box[0::3, 1] = cap
+        total = sp.csr_matrix(np.tile([1.0, 0.0, 0.0], s))
+        a_ub = sp.vstack([system.a_ub, total], format="csr")
+        b_ub = np.concatenate([np.zeros(system.a_ub.shape[0]), [cap]])
         for v in range(s):
             cost = np.zeros(3 * s)
             cost[3 * v] = -1.0
-            outcome = linprog(cost, A_ub=system.a_ub, b_ub=np.zeros(system.a_ub.shape[0]), A_eq=system.a_eq,
-                              b_eq=b_eq, bounds=box, method="highs")
+            outcome = linprog(cost, A_ub=a_ub, b_ub=b_ub, A_eq=system.a_eq, b_eq=b_eq, bounds=box, method="highs")
             if outcome.status == 0:
-                bounds[v] = min(self.force_bound, -outcome.fun * (1 + 1e-6) + 1e-9)
+                bounds[v] = min(cap, -outcome.fun * (1 + 1e-6) + 1e-9)
         return bounds
 
     def _milp(self, b_eq, sectors, time_limit):
-        """Forces and motion of the relaxation, ``None`` if infeasible, or a message if HiGHS did not decide."""
+        """Forces and motion of the relaxation, ``None`` if infeasible, or a message if HiGHS did not decide.
+
+        Beside Eqs. (9)-(10) with big Ms, three families of rows hold for every solution of (11) and
+        tighten the relaxation: the virtual-work row ``b.q + sum f_n <= 0``, friction only at closed
+        vertices, and the face cuts of :attr:`_diagonals`.
+        """
         system, d = self.system, self.kinematic
         s, free = len(system.points), system.a_eq.shape[0]
         if s == 0:
@@ -469,7 +523,6 @@ class _Problem:
         ratio = self.ratio
         mu_c = -system.cone_rows[0, 0] / math.cos(math.pi / len(system.cone_rows))  # the pyramid's widest |f_t| / f_n
         force_bounds = self._force_bounds(b_eq)  # per-vertex big Ms, as tight as cheap LPs make them
-        big_f = float(force_bounds.max())
         big_t = np.maximum(mu_c * force_bounds, 1e-9)
         big_n, big_d = self._reach[:, 0], self._reach[:, 1] + self.min_slide
         d_n, d_u, d_v = d[0::3], d[1::3], d[2::3]
@@ -487,6 +540,10 @@ class _Problem:
                                  shape=(s, size))
 
         rows.append((columns(system.a_eq, of), b_eq, b_eq))
+        # virtual work: b.q = f.dd = -sum f_n - sum alpha |dd_t|^2 <= -sum f_n for any solution of (11)
+        work = np.zeros(size)
+        work[oq:oq + n_q], work[of:of + n_f:3] = b_eq, 1.0
+        rows.append((sp.csr_matrix(work), -np.inf, 0.0))
         rows.append((columns(system.a_ub, of), -np.inf, 0.0))
         rows.append((select(of, 0) - select(oz, 0, force_bounds, 1), -np.inf, 0.0))  # f_n <= M_v z
         rows.append((columns(d_n, oq) + select(oz, 0, big_n, 1), -np.inf, big_n - 1.0))  # dd_n + 1 <= M_v (1 - z)
@@ -495,7 +552,12 @@ class _Problem:
         middle = np.column_stack([np.cos(angles[:-1] + math.pi / sectors), np.sin(angles[:-1] + math.pi / sectors)])
         one_sector = sp.csr_matrix((np.ones(n_s), (np.repeat(vertices, sectors), os_ + np.arange(n_s))),
                                    shape=(s, size))
-        rows.append((one_sector, -np.inf, 1.0))
+        rows.append((one_sector - select(oz, 0, 1.0, 1), -np.inf, 0.0))  # friction only where closed
+        cuts = self._diagonals
+        if len(cuts):
+            rows.append((sp.csr_matrix((np.tile([1.0, 1.0, -1.0], len(cuts)),
+                                        (np.repeat(np.arange(len(cuts)), 3), oz + cuts.ravel())),
+                                       shape=(len(cuts), size)), -np.inf, 1.0))
         no_sector = sp.diags(big_t) @ one_sector
         for component in (1, 2):  # no sector, no friction
             rows.append((select(of, component) - no_sector, -np.inf, 0.0))
@@ -516,7 +578,8 @@ class _Problem:
         lower = np.concatenate([np.broadcast_to(r[1], r[0].shape[0]) for r in rows])
         upper = np.concatenate([np.broadcast_to(r[2], r[0].shape[0]) for r in rows])
         low = np.concatenate([np.tile([0.0, -np.inf, -np.inf], s), np.full(n_q, -np.inf), np.zeros(n_z + n_s)])
-        high = np.concatenate([np.tile([big_f, np.inf, np.inf], s), np.full(n_q, np.inf), np.ones(n_z + n_s)])
+        high = np.concatenate([np.column_stack([force_bounds, np.full((s, 2), np.inf)]).ravel(), np.full(n_q, np.inf),
+                               np.ones(n_z + n_s)])
         motion_rows = columns(d, oq)  # |dd| <= eta, dd_n >= -eps
         motion_low = np.tile([-1.0, -ratio, -ratio], s)
         integrality = np.concatenate([np.zeros(n_f + n_q), np.ones(n_z + n_s)])

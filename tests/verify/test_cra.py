@@ -43,6 +43,19 @@ def _certificate_holds(assembly, result, gravity, density=1.0):
     assert np.allclose(cross, 0.0, atol=1e-9 * np.abs(f).max() * np.abs(slide).max())  # Eq. (9): parallel,
     assert np.all(np.einsum("ij,ij->i", slide, friction) <= 1e-12)  # and opposite
     assert np.all(np.abs(slide) <= result.parameters["eta"] / result.parameters["eps"] * (1 + 1e-6))
+    # virtual work, on which the MILP's bounds rest: load . q = sum f_n - sum f_t . dd_t (q, dd in eps)
+    p = result.parameters
+    q = np.hstack([result.motion[:, :3], result.motion[:, 3:] * p["length"]]).ravel() / p["eps_absolute"]
+    dissipated = -np.einsum("ij,ij->", slide, friction)
+    assert load @ q == pytest.approx(f[:, 0].sum() + dissipated, rel=1e-6), (load @ q, f[:, 0].sum(), dissipated)
+    # the closed vertices of a convex contact span a face of it (the MILP's face cuts)
+    for c in np.unique(result.vertex_contact):
+        polygon = result.contacts[c].polygon
+        if polygon.interiors or polygon.convex_hull.area - polygon.area > 1e-9 * polygon.area:
+            continue
+        closed = np.flatnonzero(result.closed[result.vertex_contact == c])
+        count = int(np.sum(result.vertex_contact == c))
+        assert len(closed) in (0, 1, count) or (len(closed) == 2 and closed[1] - closed[0] in (1, count - 1))
 
 
 # --- small facts ---------------------------------------------------------------------------------------------
