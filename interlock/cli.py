@@ -119,6 +119,22 @@ def _parser() -> argparse.ArgumentParser:
     stability.add_argument("--json", action="store_true", help="print JSON instead of text")
     stability.set_defaults(run=_run_stability)
 
+    sweep = commands.add_parser(
+        "sweep", help="sweep a design space (deformations or tilings) and record the verdicts at every point",
+        description="Evaluate a TOML sweep spec (see interlock.sweep.spec) point by point, on local processes "
+                    "or a Dask cluster; records go to JSON lines or Parquet as they arrive, so a stopped sweep "
+                    "resumes. A sweep over two parameters also gets a PNG map per verdict (with the plot extra).",
+        epilog="examples:\n  interlock sweep p1.toml -o p1.jsonl\n  interlock sweep p1.toml -o p1.jsonl --resume\n"
+               "  interlock sweep p1.toml -o p1.parquet --scheduler tcp://10.0.0.5:8786",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    sweep.add_argument("spec", help="the sweep spec (TOML)")
+    sweep.add_argument("-o", "--output", required=True, metavar="RESULTS", help="*.jsonl or *.parquet")
+    sweep.add_argument("--scheduler", metavar="ADDRESS", help="a running Dask scheduler (needs the sweep extra)")
+    sweep.add_argument("--workers", type=int, metavar="N", help="local processes (default: all cores)")
+    sweep.add_argument("--resume", action="store_true", help="keep the records in RESULTS, evaluate the rest")
+    sweep.set_defaults(run=_run_sweep)
+
     generate = commands.add_parser("generate", help="generate an assembly and write it (format by suffix)")
     kinds = generate.add_subparsers(dest="kind", metavar="KIND", required=True)
     escher = kinds.add_parser(
@@ -315,6 +331,57 @@ def _run_gallery(args) -> int:
     for line in gallery.contradictions:
         print(f"CONTRADICTION {line}", file=sys.stderr)
     return 1 if gallery.contradictions else 0
+
+
+def _run_sweep(args) -> int:
+    from collections import Counter
+    from pathlib import Path
+
+    from tqdm import tqdm
+
+    from interlock.sweep import SweepError, load_spec, run
+
+    spec = load_spec(args.spec)
+    if args.workers is not None and args.workers < 1:
+        raise SweepError(f"--workers must be at least 1, got {args.workers}")
+    client = None
+    if args.scheduler:
+        try:
+            from distributed import Client
+        except ImportError:
+            raise SweepError('--scheduler needs Dask: pip install "interlock[sweep]"') from None
+        try:
+            client = Client(args.scheduler, timeout=10)
+        except OSError as error:
+            raise SweepError(f"no Dask scheduler at {args.scheduler}: {error}") from None
+    try:
+        with tqdm(total=len(spec.points()), desc="sweep", unit="point", disable=None) as bar:
+            records = run(spec, args.output, executor=client, workers=args.workers, resume=args.resume,
+                          progress=bar.update)
+    finally:
+        if client is not None:
+            client.close()
+    counts = Counter(r["status"] for r in records)
+    print(f"{len(records)} points ({', '.join(f'{n} {s}' for s, n in sorted(counts.items()))}): {args.output}")
+    for verdict in spec.verdicts:
+        words = Counter(r["verdicts"].get(verdict) for r in records if r["status"] == "ok")
+        print(f"  {verdict}: " + ", ".join(f"{n} {w}" for w, n in sorted(words.items())))
+    if len(spec.parameters) == 2:
+        try:
+            from interlock.sweep.map import verdict_map
+        except ImportError:
+            return 0
+        x, y = (p.name for p in spec.parameters)
+        output = Path(args.output)
+        for verdict in spec.verdicts:
+            try:
+                path = verdict_map(records, x, y, verdict, output.with_name(f"{output.stem}-{verdict}.png"),
+                                   theory=spec.theory(x, y))
+            except SweepError as error:  # e.g. matplotlib missing: the records are the result
+                print(f"  no map: {error}", file=sys.stderr)
+                break
+            print(f"  map: {path}")
+    return 0
 
 
 def _run_generate_wallpaper(args) -> int:

@@ -1,0 +1,258 @@
+"""What a design-space sweep explores: a TOML spec, read into a :class:`SweepSpec`.
+
+A spec names the family of blocks (a wallpaper group and the intermediate
+points of its deformed edges, or RhomBlocks on random lozenge tilings), the
+parameters that vary (grids of values, or random samples with a seed) and
+the verdicts to compute at every point.  Every number of the family may be a
+parameter's name instead::
+
+    group = "p4"
+    verdicts = ["periodic", "criterion_4_3"]
+
+    [parameters]
+    t = {range = [0.2, 0.8], steps = 7}     # 7 values, ends included
+    s = {range = [-0.2, 0.2], steps = 9}
+    # h = {values = [0.5, 1.0, 2.0]}         # explicit values
+
+    [[points]]                 # one intermediate point of edge 0 (Escher trick)
+    edge = 0
+    along = "t"                # fraction of the edge, from vertex `edge` to `edge + 1`
+    offset = "s"               # distance off the edge's line, in edge lengths, to its left
+
+The points are the full grid (in the order of ``[parameters]``, last fastest)
+unless ``samples = N`` asks for N points drawn uniformly from the ranges
+(``values`` draw from their list) with ``seed``.  RhomBlocks::
+
+    verdicts = ["patch"]
+    [tiling]
+    kind = "hexagon"           # random_hexagon(a, b, c, seed)
+    a = 2
+    b = 2
+    c = "c"
+    seed = "k"                 # the tiling's random seed, a parameter here
+    variant = 0
+
+Top-level options: ``height`` (1.0), ``patch_radius`` (1.5 cells, for the
+"patch" and "stability" verdicts of Escher blocks), ``mu`` (0.5, for
+"stability"), ``chunk`` (points per task, 8).
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from interlock.errors import InterlockError
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover - Python 3.10
+    import tomli as tomllib
+
+__all__ = ["SweepError", "SweepSpec", "Parameter", "load_spec", "VERDICTS"]
+
+#: The verdicts a sweep can compute, and what they call.
+VERDICTS = {
+    "periodic": "periodic_check of the block's periodic cell (the infinite assembly)",
+    "criterion_4_3": "Criterion 4.3 of the main paper, exactly",
+    "patch": "check of a finite patch with its outer ring fixed",
+    "stability": "rbe under gravity of that patch at friction mu",
+}
+ESCHER_VERDICTS = tuple(VERDICTS)
+TILING_VERDICTS = ("patch", "stability")
+TILING_KINDS = ("hexagon",)
+TILING_KEYS = {"kind", "a", "b", "c", "seed", "variant"}
+POINT_KEYS = {"edge", "along", "offset"}
+TOP_KEYS = {"group", "tiling", "verdicts", "parameters", "points", "samples", "seed", "height", "patch_radius",
+            "mu", "chunk", "name"}
+
+
+class SweepError(InterlockError):
+    """Bad sweep input: a spec, a parameter or records that cannot be used."""
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """One varying number: ``values`` on a grid, or ``low .. high`` (or ``values``) when sampled."""
+
+    name: str
+    values: tuple[float, ...]
+    low: float | None = None
+    high: float | None = None
+
+    def sample(self, rng: np.random.Generator, count: int) -> np.ndarray:
+        if self.low is None:
+            return rng.choice(np.asarray(self.values), size=count)
+        return rng.uniform(self.low, self.high, size=count)
+
+
+@dataclass(frozen=True)
+class SweepSpec:
+    """A parsed sweep spec (see the module docstring for the TOML form).
+
+    ``family`` is ``{"group": name, "height": ..., "points": [{"edge", "along", "offset"}]}`` or
+    ``{"tiling": {"kind", "a", "b", "c", "seed", "variant"}}``, where any number may be a parameter's name.
+    """
+
+    family: dict
+    parameters: tuple[Parameter, ...]
+    verdicts: tuple[str, ...]
+    samples: int = 0
+    seed: int = 0
+    patch_radius: float = 1.5
+    mu: float = 0.5
+    chunk: int = 8
+    name: str = "sweep"
+    source: dict = field(default_factory=dict, repr=False, compare=False)
+
+    def points(self) -> list[dict]:
+        """Every point of the sweep, in order: ``{name: value}`` per point (deterministic for a seed)."""
+        names = [p.name for p in self.parameters]
+        if self.samples:
+            rng = np.random.default_rng(self.seed)
+            columns = [p.sample(rng, self.samples) for p in self.parameters]
+            return [{n: float(c[i]) for n, c in zip(names, columns)} for i in range(self.samples)]
+        return [dict(zip(names, map(float, combo))) for combo in itertools.product(*(p.values for p in self.parameters))]
+
+    def theory(self, x: str, y: str) -> list[dict]:
+        """Overlay lines for a map over parameters ``x`` and ``y``: where a swept ``offset`` is 0 the
+        intermediate point lies on its edge (collinear), so that edge is not deformed there and
+        Criterion 4.3 may change."""
+        lines = []
+        for point in self.family.get("points", ()):
+            for axis, name in (("x", x), ("y", y)):
+                if point["offset"] == name:
+                    lines.append({"axis": axis, "value": 0.0,
+                                  "label": f"point on edge {point['edge']} (collinear, edge undeformed)"})
+        return lines
+
+
+def load_spec(source) -> SweepSpec:
+    """Read a spec from a TOML file path or a dict (as :func:`tomllib.loads` gives).
+
+    >>> spec = load_spec({"group": "p4", "verdicts": ["criterion_4_3"],
+    ...                   "parameters": {"s": {"range": [-0.1, 0.1], "steps": 3}},
+    ...                   "points": [{"edge": 0, "along": 0.5, "offset": "s"}]})
+    >>> [p["s"] for p in spec.points()]
+    [-0.1, 0.0, 0.1]
+    """
+    if isinstance(source, (str, Path)):
+        path = Path(source)
+        try:
+            data = tomllib.loads(path.read_text())
+        except FileNotFoundError:
+            raise SweepError(f"no sweep spec at {path}") from None
+        except tomllib.TOMLDecodeError as error:
+            raise SweepError(f"{path} is not valid TOML: {error}") from None
+    elif isinstance(source, dict):
+        data = source
+    else:
+        raise SweepError(f"a sweep spec is a TOML file path or a dict, got {type(source).__name__}")
+    unknown = set(data) - TOP_KEYS
+    if unknown:
+        raise SweepError(f"unknown spec keys {sorted(unknown)}; known: {sorted(TOP_KEYS)}")
+    parameters = tuple(_parameter(name, value) for name, value in _table(data, "parameters").items())
+    names = {p.name for p in parameters}
+    family = _family(data, names)
+    verdicts = data.get("verdicts", ["periodic"] if "group" in data else ["patch"])
+    allowed = ESCHER_VERDICTS if "group" in family else TILING_VERDICTS
+    if not isinstance(verdicts, list) or not verdicts or any(v not in allowed for v in verdicts):
+        raise SweepError(f"verdicts must be a non-empty list from {list(allowed)}, got {verdicts!r}")
+    samples = _integer(data.get("samples", 0), "samples", 0)
+    if not samples and any(p.low is not None and len(p.values) == 0 for p in parameters):
+        raise SweepError("a range without steps can only be sampled: give steps, or samples = N")
+    return SweepSpec(family, parameters, tuple(verdicts), samples, _integer(data.get("seed", 0), "seed", 0),
+                     _number(data.get("patch_radius", 1.5), "patch_radius", positive=True),
+                     _number(data.get("mu", 0.5), "mu"), _integer(data.get("chunk", 8), "chunk", 1),
+                     str(data.get("name", Path(source).stem if isinstance(source, (str, Path)) else "sweep")), data)
+
+
+def _family(data: dict, names: set) -> dict:
+    if ("group" in data) == ("tiling" in data):
+        raise SweepError("a spec names exactly one family: group = \"p4\" (Escher blocks) or [tiling] (RhomBlocks)")
+    if "tiling" in data:
+        tiling = _table(data, "tiling")
+        if set(tiling) - TILING_KEYS or tiling.get("kind", "hexagon") not in TILING_KINDS:
+            raise SweepError(f"[tiling] takes kind = {TILING_KINDS} and {sorted(TILING_KEYS - {'kind'})}, "
+                             f"got {tiling}")
+        values = {key: _value(tiling.get(key, default), f"tiling.{key}", names)
+                  for key, default in (("a", 2), ("b", 2), ("c", 2), ("seed", 0), ("variant", 0))}
+        return {"tiling": {"kind": tiling.get("kind", "hexagon"), **values}}
+    from interlock import wallpaper
+
+    group = data["group"]
+    try:
+        wallpaper.group(group)
+    except InterlockError as error:
+        raise SweepError(f"group: {error}") from None
+    points = data.get("points", [])
+    if not isinstance(points, list):
+        raise SweepError("points must be an array of tables [[points]] with edge, along, offset")
+    parsed = []
+    for k, point in enumerate(points):
+        if not isinstance(point, dict) or set(point) != POINT_KEYS:
+            raise SweepError(f"points[{k}] needs exactly the keys {sorted(POINT_KEYS)}, got {point!r}")
+        parsed.append({"edge": _integer(point["edge"], f"points[{k}].edge", 0),
+                       "along": _value(point["along"], f"points[{k}].along", names),
+                       "offset": _value(point["offset"], f"points[{k}].offset", names)})
+    return {"group": group, "height": _value(data.get("height", 1.0), "height", names), "points": parsed}
+
+
+def _parameter(name: str, value) -> Parameter:
+    if not isinstance(value, dict):
+        raise SweepError(f"parameter {name!r} must be a table: {{range = [low, high], steps = n}} or "
+                         f"{{values = [...]}}, got {value!r}")
+    if "values" in value and set(value) == {"values"}:
+        values = value["values"]
+        if not isinstance(values, list) or not values:
+            raise SweepError(f"parameter {name!r}: values must be a non-empty list of numbers")
+        return Parameter(name, tuple(_number(v, f"parameter {name!r}") for v in values))
+    if "range" in value and set(value) <= {"range", "steps"}:
+        low_high = value["range"]
+        if not (isinstance(low_high, list) and len(low_high) == 2):
+            raise SweepError(f"parameter {name!r}: range must be [low, high], got {low_high!r}")
+        low, high = (_number(v, f"parameter {name!r}") for v in low_high)
+        if not low < high:
+            raise SweepError(f"parameter {name!r}: range needs low < high, got [{low}, {high}]")
+        steps = _integer(value.get("steps", 0), f"parameter {name!r} steps", 0)
+        if steps == 1:
+            raise SweepError(f"parameter {name!r}: steps must be 0 (sampled only) or >= 2")
+        grid = tuple(float(f"{v:.12g}") for v in np.linspace(low, high, steps))  # 0.3, not 0.29999999999999993
+        return Parameter(name, grid, low, high)
+    raise SweepError(f"parameter {name!r} must be {{range = [low, high], steps = n}} or {{values = [...]}}, "
+                     f"got {value!r}")
+
+
+def _table(data: dict, key: str) -> dict:
+    value = data.get(key, {})
+    if not isinstance(value, dict):
+        raise SweepError(f"[{key}] must be a table, got {value!r}")
+    return value
+
+
+def _value(value, what: str, names: set):
+    if isinstance(value, str):
+        if value not in names:
+            raise SweepError(f"{what} names the parameter {value!r}, which [parameters] does not define "
+                             f"(defined: {sorted(names)})")
+        return value
+    return _number(value, what)
+
+
+def _number(value, what: str, positive: bool = False) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise SweepError(f"{what} must be a finite number, got {value!r}")
+    if positive and value <= 0:
+        raise SweepError(f"{what} must be positive, got {value!r}")
+    return float(value)
+
+
+def _integer(value, what: str, least: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or value < least:
+        raise SweepError(f"{what} must be an integer >= {least}, got {value!r}")
+    return value

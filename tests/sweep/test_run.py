@@ -1,0 +1,228 @@
+"""Sweeps: specs, records, executors (local processes, Dask), resuming, and bad input."""
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from concurrent.futures import ThreadPoolExecutor
+
+import pytest
+
+from interlock import InterlockError
+from interlock.cli import main
+from interlock.sweep import SweepError, deformation, evaluate, load_spec, read_records, run
+
+#: p4, one point on edge 0: Criterion 4.3 fails (g_0 generates a finite rotation group), |offset| >= 1 makes F'
+#: self-intersect (measured), and at offset 0 the point is on its edge.
+P4 = {"group": "p4", "verdicts": ["criterion_4_3", "periodic"], "chunk": 3,
+      "parameters": {"t": {"range": [0.25, 0.75], "steps": 3}, "s": {"range": [-1.2, 1.2], "steps": 5}},
+      "points": [{"edge": 0, "along": "t", "offset": "s"}]}
+#: p1, both edge pairs deformed: Criterion 4.3 holds unless the swept point lies on edge 0 (Thm. 4.7: interlocked
+#: translationally iff it holds).
+P1 = {"group": "p1", "verdicts": ["criterion_4_3", "periodic"], "chunk": 2,
+      "parameters": {"s": {"values": [-0.2, 0.0, 0.2]}, "u": {"values": [0.0, 0.15]}},
+      "points": [{"edge": 0, "along": 0.5, "offset": "s"}, {"edge": 1, "along": 0.4, "offset": "u"}]}
+
+
+def _without_time(records):
+    return [{k: v for k, v in r.items() if k != "seconds"} for r in records]
+
+
+def _threads(spec, **options):
+    with ThreadPoolExecutor(2) as pool:
+        return run(spec, executor=pool, **options)
+
+
+# --- spec and records ----------------------------------------------------------------------------------------
+
+
+def test_grid_is_the_product_of_the_parameters_last_fastest():
+    spec = load_spec(P4)
+    points = spec.points()
+    assert len(points) == 15
+    assert points[:2] == [{"t": 0.25, "s": -1.2}, {"t": 0.25, "s": -0.6}]
+    assert points[-1] == {"t": 0.75, "s": 1.2}
+
+
+def test_samples_are_reproducible_from_the_seed_and_stay_in_range():
+    spec = load_spec({**P4, "samples": 20, "seed": 3})
+    again = load_spec({**P4, "samples": 20, "seed": 3}).points()
+    other = load_spec({**P4, "samples": 20, "seed": 4}).points()
+    assert spec.points() == again != other
+    assert all(0.25 <= p["t"] <= 0.75 and -1.2 <= p["s"] <= 1.2 for p in spec.points())
+
+
+def test_deformation_places_the_point_along_and_off_its_edge():
+    spec = load_spec(P4)
+    (point,) = deformation(spec, {"t": 0.25, "s": 0.5})[0]
+    from interlock import wallpaper
+
+    corners = wallpaper.group("p4").fundamental_domain().exterior.coords
+    (px, py), (qx, qy) = corners[0], corners[1]
+    length = ((qx - px) ** 2 + (qy - py) ** 2) ** 0.5
+    along = ((point[0] - px) * (qx - px) + (point[1] - py) * (qy - py)) / length ** 2
+    left = ((qx - px) * (point[1] - py) - (qy - py) * (point[0] - px)) / length ** 2
+    assert along == pytest.approx(0.25) and left == pytest.approx(0.5)
+
+
+def test_records_hold_verdicts_and_invalid_points_do_not_stop_the_sweep():
+    records = _threads(P4)
+    assert [r["index"] for r in records] == list(range(15))
+    invalid = [r for r in records if r["status"] == "invalid"]
+    assert {r["parameters"]["s"] for r in invalid} == {-1.2, 1.2}
+    assert all("self-intersecting" in r["message"] and r["verdicts"] == {} for r in invalid)
+    ok = [r for r in records if r["status"] == "ok"]
+    assert len(ok) == 9 and all(r["verdicts"]["criterion_4_3"] == "fails" for r in ok)
+    assert all(r["verdicts"]["periodic"] == "not interlocked" for r in ok)  # Criterion 4.3 fails: H lifts out
+    assert all(r["tolerances"]["periodic"] and r["seconds"] > 0 for r in ok)
+    json.dumps(records)  # plain data
+
+
+def test_p1_verdicts_follow_theorem_4_7():
+    for r in _threads(P1):
+        assert r["status"] == "ok"
+        holds = r["parameters"]["s"] != 0.0 or r["parameters"]["u"] != 0.0
+        assert r["verdicts"]["criterion_4_3"] == ("holds" if holds else "fails")
+
+
+def test_an_unexpected_error_at_one_point_is_recorded_as_failed(monkeypatch):
+    import interlock.sweep.record as module
+
+    original = module._verdicts
+
+    def broken(spec, parameters):
+        if parameters["s"] == 0.2:
+            raise RuntimeError("solver exploded")
+        return original(spec, parameters)
+
+    monkeypatch.setattr(module, "_verdicts", broken)
+    records = _threads(P1)
+    failed = [r for r in records if r["status"] == "failed"]
+    assert len(failed) == 2 and all(r["message"] == "RuntimeError: solver exploded" for r in failed)
+    assert sum(r["status"] == "ok" for r in records) == 4
+
+
+# --- executors ---------------------------------------------------------------------------------------------
+
+
+def test_local_processes_give_the_records_of_one_thread():
+    with ThreadPoolExecutor(1) as pool:
+        one = run(P4, executor=pool)
+    assert _without_time(run(P4, workers=2)) == _without_time(one)
+
+
+def test_dask_local_cluster_gives_exactly_the_records_of_local_processes():
+    distributed = pytest.importorskip("distributed")
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0") \
+            as cluster, distributed.Client(cluster) as client:
+        on_dask = run(P4, executor=client)
+        assert len(client.scheduler_info()["workers"]) == 2
+    assert _without_time(on_dask) == _without_time(run(P4, workers=2))
+
+
+# --- output and resuming -----------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("suffix", [".jsonl", ".parquet"])
+def test_output_round_trips_and_resume_evaluates_only_missing_points(tmp_path, suffix):
+    if suffix == ".parquet":
+        pytest.importorskip("pyarrow")
+    path = tmp_path / f"p1{suffix}"
+    first = _threads({**P1, "parameters": {**P1["parameters"], "s": {"values": [-0.2, 0.0]}}}, output=path)
+    assert read_records(path) == first
+    done = []
+    second = _threads(P1, output=path, resume=True, progress=done.append)
+    assert sum(done) == 2  # the two points of s = 0.2; the first four kept as they were
+    assert second[:4] == first and read_records(path) == second
+    with pytest.raises(SweepError, match="exists: resume it"):
+        _threads(P1, output=path)
+
+
+def test_resume_after_a_killed_run_repeats_no_finished_point(tmp_path):
+    spec = {**P4, "verdicts": ["periodic"], "chunk": 1,
+            "parameters": {"t": {"range": [0.2, 0.8], "steps": 7}, "s": {"range": [-0.4, 0.4], "steps": 5}}}
+    spec_path, out = tmp_path / "spec.toml", tmp_path / "out.jsonl"
+    spec_path.write_text(_toml(spec))
+    process = subprocess.Popen([sys.executable, "-m", "interlock", "sweep", str(spec_path), "-o", str(out),
+                                "--workers", "1"], start_new_session=True, stdout=subprocess.DEVNULL,
+                               stderr=subprocess.DEVNULL)
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline and (not out.exists() or out.read_text().count("\n") < 3):
+        time.sleep(0.05)
+    os.killpg(process.pid, signal.SIGKILL)
+    process.wait()
+    before = read_records(out)
+    assert 3 <= len(before) < 35, "the run should be killed part-way"
+    evaluated = []
+    after = run(spec_path, out, workers=2, resume=True, progress=evaluated.append)
+    assert sum(evaluated) == 35 - len(before)
+    assert [r["index"] for r in after] == list(range(35))
+    kept = {r["index"]: r for r in after}
+    assert all(kept[r["index"]] == r for r in before)  # same seconds too: not evaluated again
+    lines = [json.loads(line)["index"] for line in out.read_text().splitlines()]
+    assert sorted(lines) == list(range(35))  # every point once in the file
+
+
+def _toml(spec: dict) -> str:
+    lines = [f'group = "{spec["group"]}"', f"verdicts = {json.dumps(spec['verdicts'])}", f"chunk = {spec['chunk']}",
+             "[parameters]"]
+    lines += [f"{name} = {{range = [{p['range'][0]}, {p['range'][1]}], steps = {p['steps']}}}"
+              for name, p in spec["parameters"].items()]
+    for point in spec["points"]:
+        lines += ["[[points]]", f"edge = {point['edge']}"]
+        lines += [f"{key} = {json.dumps(point[key])}" for key in ("along", "offset")]
+    return "\n".join(lines) + "\n"
+
+
+# --- bad input --------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("change, message", [
+    ({"colour": 1}, "unknown spec keys"),
+    ({"group": "p7"}, "group"),
+    ({"verdicts": ["beauty"]}, "verdicts must be"),
+    ({"parameters": {"s": {"range": [1, 0], "steps": 3}}}, "low < high"),
+    ({"parameters": {"s": {"range": [0, 1], "steps": 1}}}, "steps must be"),
+    ({"parameters": {"s": [0, 1]}}, "must be a table"),
+    ({"points": [{"edge": 0, "along": 0.5, "offset": "q"}]}, "names the parameter 'q'"),
+    ({"points": [{"edge": 0, "along": 0.5}]}, "needs exactly the keys"),
+    ({"tiling": {"kind": "hexagon"}}, "exactly one family"),
+    ({"chunk": 0}, "chunk must be"),
+])
+def test_bad_specs_raise_sweep_error(change, message):
+    with pytest.raises(SweepError, match=message) as caught:
+        load_spec({**P1, **change})
+    assert isinstance(caught.value, InterlockError) and isinstance(caught.value, ValueError)
+
+
+def test_a_missing_edge_is_an_invalid_point_not_a_crash():
+    spec = load_spec({**P1, "points": [{"edge": 9, "along": 0.5, "offset": "s"}]})
+    record = evaluate(spec, 0, {"s": 0.1, "u": 0.0})
+    assert record["status"] == "invalid" and "edge 9 does not exist" in record["message"]
+
+
+def test_cli_reports_bad_input_in_one_line(tmp_path, capsys):
+    bad = tmp_path / "bad.toml"
+    bad.write_text('group = "p4"\nverdicts = ["nope"]\n')
+    assert main(["sweep", str(bad), "-o", str(tmp_path / "x.jsonl")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and err.startswith("interlock sweep: error: verdicts must be")
+    assert main(["sweep", str(tmp_path / "none.toml"), "-o", str(tmp_path / "x.jsonl")]) == 2
+    assert main(["sweep", str(bad), "-o", str(tmp_path / "x.csv")]) == 2
+
+
+def test_cli_sweep_writes_records_and_a_map(tmp_path, capsys):
+    pytest.importorskip("matplotlib")
+    spec = tmp_path / "p1.toml"
+    spec.write_text(_toml({**P1, "verdicts": ["criterion_4_3"],
+                           "parameters": {"s": {"range": [-0.2, 0.2], "steps": 3},
+                                          "u": {"range": [0.0, 0.3], "steps": 3}}}))
+    out = tmp_path / "p1.jsonl"
+    assert main(["sweep", str(spec), "-o", str(out), "--workers", "1"]) == 0
+    printed = capsys.readouterr().out
+    assert "9 points (9 ok)" in printed and "criterion_4_3: 1 fails, 8 holds" in printed
+    png = tmp_path / "p1-criterion_4_3.png"
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert len(read_records(out)) == 9
