@@ -85,6 +85,7 @@ def test_p1_verdicts_follow_theorem_4_7():
         assert r["status"] == "ok"
         holds = r["parameters"]["s"] != 0.0 or r["parameters"]["u"] != 0.0
         assert r["verdicts"]["criterion_4_3"] == ("holds" if holds else "fails")
+        assert r["verdicts"]["periodic"] == ("interlocked" if holds else "not interlocked")
 
 
 def test_an_unexpected_error_at_one_point_is_recorded_as_failed(monkeypatch):
@@ -226,3 +227,18 @@ def test_cli_sweep_writes_records_and_a_map(tmp_path, capsys):
     png = tmp_path / "p1-criterion_4_3.png"
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert len(read_records(out)) == 9
+
+
+def test_the_example_specs_say_what_their_comments_claim():
+    from pathlib import Path
+
+    folder = Path(__file__).resolve().parents[2] / "docs" / "sweeps"
+    p1 = run(folder / "p1-edge0.toml", workers=2)
+    assert len(p1) == 81 and sum(r["status"] == "invalid" for r in p1) == 2
+    for r in (r for r in p1 if r["status"] == "ok"):
+        holds = r["parameters"]["s"] != 0.0
+        assert r["verdicts"] == {"periodic": "interlocked" if holds else "not interlocked",
+                                 "criterion_4_3": "holds" if holds else "fails"}
+    p4 = run(folder / "p4-edge0.toml", workers=2)
+    assert {r["status"] == "invalid" for r in p4 if abs(r["parameters"]["s"]) >= 1.0} == {True}
+    assert {tuple(r["verdicts"].values()) for r in p4 if r["status"] == "ok"} == {("not interlocked", "fails")}
