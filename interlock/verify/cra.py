@@ -83,6 +83,13 @@ DEFAULT_MIN_SLIDE = 1e-3
 #: A vertex is closed when ``dd_n + eps <= ACTIVE_TOL * eps``; it slides when ``|dd_t| > SLIDE_TOL * eps``.
 ACTIVE_TOL = 1e-7
 SLIDE_TOL = 1e-7
+#: Slack added to every bound the MILP derives by an LP (big Ms, the virtual-work bound and row), relative and
+#: absolute (forces in units of the weight, motions of eps): a solution of (11) often attains them exactly (a
+#: block pushed into a groove closes every vertex and does exactly the most work), and HiGHS' tolerances would
+#: then call the MILP infeasible.
+BOUND_MARGIN = 1e-3
+#: Factor on the big Ms of the second, looser MILP that confirms an infeasibility (see ``_Problem._milp``).
+LOOSE = 10.0
 #: Vertices within ``SNAP_TOL * eps`` of closed in a local solver's motion are snapped shut before checking.
 SNAP_TOL = 1e-2
 #: Seconds HiGHS may spend on one MILP before the answer is "inconclusive".
@@ -313,10 +320,12 @@ class _Problem:
             tried.append(count)
             started = time.perf_counter()
             outcome = self._milp(b_eq, count, time_limit)
+            if outcome is None:  # an infeasibility claim is checked on a looser formulation (floating point)
+                outcome = self._milp(b_eq, count, time_limit, tightened=False)
             timings["milp"] += time.perf_counter() - started
             if outcome is None:
                 status, message = "unstable", (f"no motion realises an equilibrium (MILP with {count} sectors "
-                                               f"infeasible)")
+                                               f"infeasible, with and without the cuts)")
                 break
             if isinstance(outcome, str):
                 message = outcome
@@ -447,7 +456,7 @@ class _Problem:
                                   method="highs")
                 if outcome.status == 0:
                     largest[row] = max(largest[row] if sign < 0 else 0.0, -outcome.fun)
-        largest = largest.reshape(-1, 3) * (1 + 1e-6) + 1e-9
+        largest = largest.reshape(-1, 3) * (1 + BOUND_MARGIN) + BOUND_MARGIN
         return np.column_stack([largest[:, 0] + 1.0, np.hypot(largest[:, 1], largest[:, 2])])
 
     @cached_property
@@ -484,7 +493,7 @@ class _Problem:
         outcome = linprog(b_eq, A_ub=sp.vstack([d, -d], format="csr"),
                           b_ub=np.concatenate([np.full(3 * s, self.ratio), np.tile([1.0, self.ratio, self.ratio], s)]),
                           bounds=(None, None), method="highs")
-        return -outcome.fun * (1 + 1e-6) + 1e-9 if outcome.status == 0 else np.inf
+        return -outcome.fun * (1 + BOUND_MARGIN) + BOUND_MARGIN if outcome.status == 0 else np.inf
 
     def _force_bounds(self, b_eq):
         """Per vertex, the largest ``f_n`` of any RBE equilibrium whose normal forces sum to at most
@@ -503,15 +512,17 @@ class _Problem:
             cost[3 * v] = -1.0
             outcome = linprog(cost, A_ub=a_ub, b_ub=b_ub, A_eq=system.a_eq, b_eq=b_eq, bounds=box, method="highs")
             if outcome.status == 0:
-                bounds[v] = min(cap, -outcome.fun * (1 + 1e-6) + 1e-9)
+                bounds[v] = min(cap, -outcome.fun * (1 + BOUND_MARGIN) + BOUND_MARGIN)
         return bounds
 
-    def _milp(self, b_eq, sectors, time_limit):
+    def _milp(self, b_eq, sectors, time_limit, tightened: bool = True):
         """Forces and motion of the relaxation, ``None`` if infeasible, or a message if HiGHS did not decide.
 
         Beside Eqs. (9)-(10) with big Ms, three families of rows hold for every solution of (11) and
-        tighten the relaxation: the virtual-work row ``b.q + sum f_n <= 0``, friction only at closed
-        vertices, and the face cuts of :attr:`_diagonals`.
+        tighten the relaxation (``tightened``): the virtual-work row ``b.q + sum f_n <= 0``, friction
+        only at closed vertices, and the face cuts of :attr:`_diagonals`.  Without them, and with the big
+        Ms :data:`LOOSE` times larger, the MILP is a second, numerically different route to the same
+        answer, which :meth:`solve` asks before it calls an assembly unstable.
         """
         system, d = self.system, self.kinematic
         s, free = len(system.points), system.a_eq.shape[0]
@@ -522,9 +533,10 @@ class _Problem:
         of, oq, oz, os_ = 0, n_f, n_f + n_q, n_f + n_q + n_z
         ratio = self.ratio
         mu_c = -system.cone_rows[0, 0] / math.cos(math.pi / len(system.cone_rows))  # the pyramid's widest |f_t| / f_n
-        force_bounds = self._force_bounds(b_eq)  # per-vertex big Ms, as tight as cheap LPs make them
+        loose = 1.0 if tightened else LOOSE
+        force_bounds = self._force_bounds(b_eq) * loose  # per-vertex big Ms, as tight as cheap LPs make them
         big_t = np.maximum(mu_c * force_bounds, 1e-9)
-        big_n, big_d = self._reach[:, 0], self._reach[:, 1] + self.min_slide
+        big_n, big_d = self._reach[:, 0] * loose, self._reach[:, 1] * loose + self.min_slide
         d_n, d_u, d_v = d[0::3], d[1::3], d[2::3]
         vertices = np.arange(s)
         rows = []  # (matrix over x, lower, upper)
@@ -540,10 +552,6 @@ class _Problem:
                                  shape=(s, size))
 
         rows.append((columns(system.a_eq, of), b_eq, b_eq))
-        # virtual work: b.q = f.dd = -sum f_n - sum alpha |dd_t|^2 <= -sum f_n for any solution of (11)
-        work = np.zeros(size)
-        work[oq:oq + n_q], work[of:of + n_f:3] = b_eq, 1.0
-        rows.append((sp.csr_matrix(work), -np.inf, 0.0))
         rows.append((columns(system.a_ub, of), -np.inf, 0.0))
         rows.append((select(of, 0) - select(oz, 0, force_bounds, 1), -np.inf, 0.0))  # f_n <= M_v z
         rows.append((columns(d_n, oq) + select(oz, 0, big_n, 1), -np.inf, big_n - 1.0))  # dd_n + 1 <= M_v (1 - z)
@@ -552,12 +560,19 @@ class _Problem:
         middle = np.column_stack([np.cos(angles[:-1] + math.pi / sectors), np.sin(angles[:-1] + math.pi / sectors)])
         one_sector = sp.csr_matrix((np.ones(n_s), (np.repeat(vertices, sectors), os_ + np.arange(n_s))),
                                    shape=(s, size))
-        rows.append((one_sector - select(oz, 0, 1.0, 1), -np.inf, 0.0))  # friction only where closed
-        cuts = self._diagonals
-        if len(cuts):
-            rows.append((sp.csr_matrix((np.tile([1.0, 1.0, -1.0], len(cuts)),
-                                        (np.repeat(np.arange(len(cuts)), 3), oz + cuts.ravel())),
-                                       shape=(len(cuts), size)), -np.inf, 1.0))
+        if tightened:
+            # virtual work: b.q = f.dd = -sum f_n - sum alpha |dd_t|^2 <= -sum f_n for any solution of (11)
+            work = np.zeros(size)
+            work[oq:oq + n_q], work[of:of + n_f:3] = b_eq, 1.0
+            rows.append((sp.csr_matrix(work), -np.inf, BOUND_MARGIN))
+            rows.append((one_sector - select(oz, 0, 1.0, 1), -np.inf, 0.0))  # friction only where closed
+            cuts = self._diagonals
+            if len(cuts):
+                rows.append((sp.csr_matrix((np.tile([1.0, 1.0, -1.0], len(cuts)),
+                                            (np.repeat(np.arange(len(cuts)), 3), oz + cuts.ravel())),
+                                           shape=(len(cuts), size)), -np.inf, 1.0))
+        else:
+            rows.append((one_sector, -np.inf, 1.0))
         no_sector = sp.diags(big_t) @ one_sector
         for component in (1, 2):  # no sector, no friction
             rows.append((select(of, component) - no_sector, -np.inf, 0.0))

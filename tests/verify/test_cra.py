@@ -156,6 +156,16 @@ def test_model_a_falls_though_rbe_holds_it(shared_data, mu):
     assert cra(a, mu=mu, contacts=found).status == "unstable"
 
 
+def test_a_block_pushed_into_its_groove_is_not_called_unstable(shared_data):
+    # type-c about y at mu 0.2 holds to 41.3 deg (Table 2).  At 30 deg the solution closes all 8 vertices without
+    # sliding, so it attains the MILP's virtual-work bound and force bounds exactly: without BOUND_MARGIN, HiGHS'
+    # tolerances called the MILP infeasible and the answer was a wrong "unstable" (found by the benchmark).
+    assembly, found = _model(shared_data, "type-c")
+    result = cra(assembly, 0.2, gravity=tilted_gravity("y", 30.0), contacts=found)
+    assert result.status == "stable"
+    _certificate_holds(assembly, result, tilted_gravity("y", 30.0))
+
+
 # --- Table 2 -------------------------------------------------------------------------------------------------
 
 #: (model, axis): CRA critical angle of the paper's Table 2 for mu = 0.20 and mu = 0.84.
