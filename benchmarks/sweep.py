@@ -44,11 +44,7 @@ import time
 from benchmarks.common import limited_blas, load_average, main, pyplot, save_chart, write_json
 from interlock.sweep import load_spec
 from interlock.sweep import run as run_sweep
-
-try:  # the task a sweep worker runs (its module was being renamed from evaluate to record when this was written)
-    from interlock.sweep.record import evaluate_chunk
-except ImportError:
-    from interlock.sweep.evaluate import evaluate_chunk
+from interlock.sweep.record import evaluate_chunk
 
 GROUPS = ("p1", "p2", "p3", "p4", "p6")
 QUICK_GROUPS = ("p1", "p4")

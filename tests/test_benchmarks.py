@@ -10,7 +10,8 @@ import pytest
 from tests.conftest import SHARED_DATA
 
 ROOT = Path(__file__).resolve().parents[1]
-NAMES = ("wallpaper", "rhomblock", "verify", "scaling", "periodic", "accuracy", "degeneracy", "gallery", "stability")
+NAMES = ("wallpaper", "rhomblock", "verify", "scaling", "periodic", "accuracy", "degeneracy", "gallery", "stability",
+         "sweep")
 
 
 @pytest.fixture(scope="module")
