@@ -444,20 +444,22 @@ class _Problem:
 
     @cached_property
     def _reach(self) -> np.ndarray:
-        """Per vertex ``(max dd_n + eps, max |dd_t|)`` over the allowed motions (the MILP's big Ms), eps = 1."""
+        """Per vertex ``(max dd_n + eps, max |dd_t|)`` over the allowed motions (the MILP's big Ms), eps = 1.
+
+        ``dd_n`` by an LP per vertex (the geometry often keeps it far below ``eta``, e.g. between two walls);
+        ``|dd_t| <= sqrt(2) eta`` from the bound on each component, which LPs do not improve in practice.
+        """
         d = self.kinematic
         s = d.shape[0] // 3
         a_ub = sp.vstack([d, -d], format="csr")
         b_ub = np.concatenate([np.full(3 * s, self.ratio), np.tile([1.0, self.ratio, self.ratio], s)])
-        largest = np.full(3 * s, self.ratio)  # max |dd| per row
-        for row in range(3 * s):
-            for sign in ((1.0,) if row % 3 == 0 else (1.0, -1.0)):
-                outcome = linprog(-sign * d[row].toarray().ravel(), A_ub=a_ub, b_ub=b_ub, bounds=(None, None),
-                                  method="highs")
-                if outcome.status == 0:
-                    largest[row] = max(largest[row] if sign < 0 else 0.0, -outcome.fun)
-        largest = largest.reshape(-1, 3) * (1 + BOUND_MARGIN) + BOUND_MARGIN
-        return np.column_stack([largest[:, 0] + 1.0, np.hypot(largest[:, 1], largest[:, 2])])
+        normal = np.full(s, self.ratio)
+        for v in range(s):
+            outcome = linprog(-d[3 * v].toarray().ravel(), A_ub=a_ub, b_ub=b_ub, bounds=(None, None), method="highs")
+            if outcome.status == 0:
+                normal[v] = -outcome.fun
+        normal = normal * (1 + BOUND_MARGIN) + BOUND_MARGIN + 1.0
+        return np.column_stack([normal, np.full(s, math.hypot(self.ratio, self.ratio) * (1 + BOUND_MARGIN))])
 
     @cached_property
     def _diagonals(self) -> np.ndarray:
