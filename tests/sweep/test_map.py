@@ -208,3 +208,9 @@ def test_any_full_grid_image_holds_each_cell_category(nx, ny, data):
         assert np.allclose(colours[n // nx, n % nx], expected[kind])
     counts = [int(text.rsplit("(", 1)[1].rstrip(")")) for text in legend_texts(fig)]
     assert sum(counts) == nx * ny and len(counts) == len(set(kinds))
+
+
+def test_a_sweep_with_only_invalid_points_is_still_drawn():
+    # found by hypothesis: with no "ok" record no verdict exists, but the map of invalid points is the answer
+    records = [record(n, float(n % 2), float(n // 2), None, "invalid") for n in range(4)]
+    assert legend_texts(verdict_map(records, "s0", "t0")) == ["invalid deformation (4)"]
