@@ -316,12 +316,15 @@ class _Problem:
             parameters = {**self.parameters, "sectors": tried, "gravity": gravity.tolist()}
             return self._result(status, message, forces * total if status == "stable" else None, motion,
                                 parameters, timings)
+        started = time.perf_counter()
+        force_bounds = self._force_bounds(b_eq)  # the big Ms of every MILP below
+        timings["milp"] += time.perf_counter() - started
         for count in (sectors,) + tuple(s for s in REFINED_SECTORS if s > sectors):
             tried.append(count)
             started = time.perf_counter()
-            outcome = self._milp(b_eq, count, time_limit)
+            outcome = self._milp(b_eq, force_bounds, count, time_limit)
             if outcome is None:  # an infeasibility claim is checked on a looser formulation (floating point)
-                outcome = self._milp(b_eq, count, time_limit, tightened=False)
+                outcome = self._milp(b_eq, force_bounds, count, time_limit, tightened=False)
             timings["milp"] += time.perf_counter() - started
             if outcome is None:
                 status, message = "unstable", (f"no motion realises an equilibrium (MILP with {count} sectors "
@@ -517,8 +520,10 @@ class _Problem:
                 bounds[v] = min(cap, -outcome.fun * (1 + BOUND_MARGIN) + BOUND_MARGIN)
         return bounds
 
-    def _milp(self, b_eq, sectors, time_limit, tightened: bool = True):
+    def _milp(self, b_eq, force_bounds, sectors, time_limit, tightened: bool = True):
         """Forces and motion of the relaxation, ``None`` if infeasible, or a message if HiGHS did not decide.
+
+        ``force_bounds`` are :meth:`_force_bounds` for this load, the big Ms of ``f_n``.
 
         Beside Eqs. (9)-(10) with big Ms, three families of rows hold for every solution of (11) and
         tighten the relaxation (``tightened``): the virtual-work row ``b.q + sum f_n <= 0``, friction
@@ -536,7 +541,7 @@ class _Problem:
         ratio = self.ratio
         mu_c = -system.cone_rows[0, 0] / math.cos(math.pi / len(system.cone_rows))  # the pyramid's widest |f_t| / f_n
         loose = 1.0 if tightened else LOOSE
-        force_bounds = self._force_bounds(b_eq) * loose  # per-vertex big Ms, as tight as cheap LPs make them
+        force_bounds = force_bounds * loose
         big_t = np.maximum(mu_c * force_bounds, 1e-9)
         big_n, big_d = self._reach[:, 0] * loose, self._reach[:, 1] * loose + self.min_slide
         d_n, d_u, d_v = d[0::3], d[1::3], d[2::3]
