@@ -102,18 +102,16 @@ class _JsonLines:
 
     def __init__(self, path: Path, spec: SweepSpec):
         self.path = path
-        self.records = self.read(path) if path.exists() else []
-        if path.exists():  # cut a partial last line before appending
-            text = path.read_bytes()
-            path.write_bytes(text[:text.rfind(b"\n") + 1])
+        self.records = []
+        if path.exists():  # keep the whole lines, cut a partial last one before appending
+            whole = path.read_bytes()
+            whole = whole[:whole.rfind(b"\n") + 1]
+            path.write_bytes(whole)
+            self.records = [json.loads(line) for line in whole.decode().splitlines()]
 
     @staticmethod
     def read(path: Path) -> list[dict]:
-        records = []
-        for line in path.read_text().splitlines(keepends=True):
-            if line.endswith("\n"):
-                records.append(json.loads(line))
-        return records
+        return [json.loads(line) for line in path.read_text().splitlines(keepends=True) if line.endswith("\n")]
 
     def write(self, records: list[dict]) -> None:
         with self.path.open("a") as stream:

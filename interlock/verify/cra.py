@@ -446,6 +446,14 @@ class _Problem:
     # --- MILP relaxation --------------------------------------------------------------------------------------
 
     @cached_property
+    def _allowed_motions(self) -> tuple[sp.csr_matrix, np.ndarray]:
+        """``(A, b)`` with ``A q <= b`` exactly when ``dd_n >= -eps`` and ``|dd| <= eta`` (eps = 1)."""
+        d = self.kinematic
+        s = d.shape[0] // 3
+        return (sp.vstack([d, -d], format="csr"),
+                np.concatenate([np.full(3 * s, self.ratio), np.tile([1.0, self.ratio, self.ratio], s)]))
+
+    @cached_property
     def _reach(self) -> np.ndarray:
         """Per vertex ``(max dd_n + eps, max |dd_t|)`` over the allowed motions (the MILP's big Ms), eps = 1.
 
@@ -454,8 +462,7 @@ class _Problem:
         """
         d = self.kinematic
         s = d.shape[0] // 3
-        a_ub = sp.vstack([d, -d], format="csr")
-        b_ub = np.concatenate([np.full(3 * s, self.ratio), np.tile([1.0, self.ratio, self.ratio], s)])
+        a_ub, b_ub = self._allowed_motions
         normal = np.full(s, self.ratio)
         for v in range(s):
             outcome = linprog(-d[3 * v].toarray().ravel(), A_ub=a_ub, b_ub=b_ub, bounds=(None, None), method="highs")
@@ -493,11 +500,8 @@ class _Problem:
         By virtual work, ``-b.q = sum f_n + sum alpha |dd_t|^2`` (eps = 1) for
         every solution of (11), so this bounds the sum of its normal forces.
         """
-        d = self.kinematic
-        s = d.shape[0] // 3
-        outcome = linprog(b_eq, A_ub=sp.vstack([d, -d], format="csr"),
-                          b_ub=np.concatenate([np.full(3 * s, self.ratio), np.tile([1.0, self.ratio, self.ratio], s)]),
-                          bounds=(None, None), method="highs")
+        a_ub, b_ub = self._allowed_motions
+        outcome = linprog(b_eq, A_ub=a_ub, b_ub=b_ub, bounds=(None, None), method="highs")
         return -outcome.fun * (1 + BOUND_MARGIN) + BOUND_MARGIN if outcome.status == 0 else np.inf
 
     def _force_bounds(self, b_eq):
