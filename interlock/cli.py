@@ -66,6 +66,11 @@ def _parser() -> argparse.ArgumentParser:
                         help="frame: block indices, e.g. 0,1 or 0-3,7 (default: none)")
     verify.add_argument("--translational", action="store_true", help="translations only")
     verify.add_argument("--certify", action="store_true", help="re-check the verdict rigorously")
+    verify.add_argument("--order", type=int, choices=(1, 2), default=1,
+                        help="2: take a verdict that is not 'interlocked' to second order and try the motion "
+                             "as a finite one (default 1: first order)")
+    verify.add_argument("--frames", metavar="FOLDER",
+                        help="with --order 2: write pictures of a finite motion shown into FOLDER")
     verify.add_argument("--json", action="store_true", help="print JSON instead of text")
     verify.set_defaults(run=_run_verify)
 
@@ -229,13 +234,18 @@ def _run_verify(args) -> int:
 
     paths = args.paths[0] if len(args.paths) == 1 else args.paths
     assembly = Assembly.load(paths, frame=_indices(args.fixed))
-    stages = [s for s in STAGES if s != "certify" or args.certify]
+    stages = [s for s in STAGES if (s != "certify" or args.certify) and (s != "beyond" or args.order == 2)]
     with tqdm(total=len(stages), desc="verify", unit="stage", disable=None, leave=False) as bar:
         def announce(stage):
             bar.set_description(f"verify: {stage}")
             bar.update(1)
 
-        verdict = check(assembly, translational=args.translational, certify=args.certify, progress=announce)
+        verdict = check(assembly, translational=args.translational, certify=args.certify, progress=announce,
+                        order=args.order)
+    if args.frames and verdict.finite_motion is not None and verdict.finite_motion.shown:
+        from interlock.verify.motion import export_motion
+
+        export_motion(assembly, verdict.finite_motion, args.frames)
     if args.json:
         record = verdict.to_dict()
         record["blocks"] = [str(label) for label in assembly.labels]
@@ -249,6 +259,12 @@ def _run_verify(args) -> int:
         print(f"moving blocks: {shown}{more}")
     if verdict.stress is not None and verdict.interlocked:
         print(f"self-stress: {len(verdict.stress)} positive weights, smallest {verdict.stress.min():.3g}")
+    if verdict.second_order is not None:
+        print(verdict.second_order)
+    if verdict.finite_motion is not None:
+        print(f"finite motion: {verdict.finite_motion.message}")
+        if args.frames and verdict.finite_motion.shown:
+            print(f"frames of the motion: {args.frames}")
     timings = ", ".join(f"{name} {seconds:.3f}s" for name, seconds in verdict.timings.items())
     print(f"timings: {timings}")
     return 0

@@ -20,7 +20,7 @@ from interlock.verify.contacts import contacts as find_contacts
 from interlock.verify.matrix import InterlockingMatrix, interlocking_matrix
 from interlock.verify.validate import validate as check_overlaps
 
-__all__ = ["Verdict", "check", "STAGES", "RANK_RTOL", "RANK_CLEAR_RTOL", "GRAM_RESOLUTION", "GRAM_SURE_RTOL", "LP_TOL", "LP_SOLVERS",
+__all__ = ["Verdict", "check", "beyond_first_order", "STAGES", "RANK_RTOL", "RANK_CLEAR_RTOL", "GRAM_RESOLUTION", "GRAM_SURE_RTOL", "LP_TOL", "LP_SOLVERS",
            "MOVING_RTOL", "DENSE_COLUMNS", "SOLVER_THREADS", "MAX_KERNEL_PROBE", "INVERSE_ITERATIONS"]
 
 #: A singular value at most ``RANK_RTOL * sigma_max`` is zero ...
@@ -39,7 +39,7 @@ LP_SOLVERS = ("clarabel", "highs")
 #: Blocks whose twist is below this fraction of the largest one do not move.
 MOVING_RTOL = 1e-6
 #: The stages of :func:`check`, in order, as reported to its ``progress`` callback and in ``timings``.
-STAGES = ("validate", "contacts", "matrix", "rank", "lp", "certify")
+STAGES = ("validate", "contacts", "matrix", "rank", "lp", "certify", "beyond")
 #: Up to this many columns the rank comes from a dense SVD; above, from block inverse iteration on A^T A.
 DENSE_COLUMNS = 1200
 #: The sparse path looks for at most this many zero singular values (the kernel dimension is then a lower bound).
@@ -67,6 +67,10 @@ class Verdict:
     the contact tolerances (:attr:`~interlock.verify.contacts.Contact.planar`):
     a first-order motion that slides across one of them is not reported as
     False, since the real, bent faces may block it.
+
+    With ``order=2`` (:func:`check`), ``interlocked`` is True also when a
+    first-order motion is blocked at second order (``second_order``), False
+    only when a finite motion was shown (``finite_motion``), and None otherwise.
     """
 
     interlocked: bool | None
@@ -85,9 +89,16 @@ class Verdict:
     bent_contacts: int = 0
     tolerances: dict = field(default_factory=dict)
     timings: dict = field(default_factory=dict)
+    order: int = 1
+    second_order: object = None  # SecondOrder (order 2)
+    finite_motion: object = None  # FiniteMotion (order 2), the last one tried
 
     def __str__(self) -> str:
         word = {True: "interlocked", False: "not infinitesimally interlocked", None: "inconclusive"}[self.interlocked]
+        if self.interlocked is True and self.second_order is not None and self.second_order.blocked:
+            word = "interlocked (second order)"
+        elif self.interlocked is False and self.finite_motion is not None and self.finite_motion.shown:
+            word = "not interlocked (finite motion shown)"
         cert = ", certified" if self.certified else ""
         return f"{word}{cert}: {self.status} (A {self.shape[0]}x{self.shape[1]}, rank {self.rank})"
 
@@ -110,12 +121,15 @@ class Verdict:
             "bent_contacts": self.bent_contacts,
             "tolerances": dict(self.tolerances),
             "timings": dict(self.timings),
+            "order": self.order,
+            "second_order": None if self.second_order is None else self.second_order.to_dict(),
+            "finite_motion": None if self.finite_motion is None else self.finite_motion.to_dict(),
         }
 
 
 def check(assembly: Assembly, frame=None, translational: bool = False, certify: bool = False, *,
           rank_rtol: float = RANK_RTOL, lp_tol: float = LP_TOL, contacts=None, validate: bool = True,
-          progress=None, lp_solver: str = "clarabel") -> Verdict:
+          progress=None, lp_solver: str = "clarabel", order: int = 1) -> Verdict:
     """Decide whether the assembly is infinitesimally interlocked with the given frame.
 
     The assembly is infinitesimally interlocked (Def. 3.3) iff ``{x : A x >= 0} = {0}``
@@ -150,6 +164,13 @@ def check(assembly: Assembly, frame=None, translational: bool = False, certify: 
     lp_solver : {"clarabel", "highs"}
         Solver of the stress LP; HiGHS also serves as fallback when Clarabel
         neither solves nor proves infeasibility.  Reported in ``tolerances``.
+    order : {1, 2}
+        1: the first-order verdict above.  2: a verdict that is not
+        "interlocked" is taken further (:func:`beyond_first_order`): blocked at
+        second order (:mod:`interlock.verify.second_order`) gives True
+        ("interlocked (second order)"), a finite motion shown
+        (:mod:`interlock.verify.motion`) gives False ("not interlocked"),
+        anything else None, saying what was tried.
 
     Notes
     -----
@@ -176,6 +197,8 @@ def check(assembly: Assembly, frame=None, translational: bool = False, certify: 
         raise InterlockError(f"unknown lp_solver {lp_solver!r}; choose one of {', '.join(LP_SOLVERS)}")
     if len(assembly) == 0:
         raise InterlockError("the assembly has no blocks; there is nothing to check")
+    if order not in (1, 2):
+        raise InterlockError(f"order must be 1 (first order) or 2 (second order and finite motions), got {order!r}")
     timings = {}
     if validate:
         with _stage(timings, "validate", progress):
@@ -231,7 +254,53 @@ def check(assembly: Assembly, frame=None, translational: bool = False, certify: 
 
         with _stage(timings, "certify", progress):
             verdict = certify_verdict(assembly, A, verdict)
+    if order == 2 and verdict.interlocked is not True:
+        with _stage(timings, "beyond", progress):
+            verdict = beyond_first_order(assembly, verdict, contacts=found)
     return verdict
+
+
+def beyond_first_order(assembly: Assembly, verdict: Verdict, *, contacts=None) -> Verdict:
+    """Take a first-order verdict that is not "interlocked" to second order and to finite motions.
+
+    1. Prestress stability (:func:`~interlock.verify.second_order.second_order`): a stress that makes the
+       second-order form of the gap functions negative definite on the kernel proves that nothing moves:
+       True, "interlocked (second order)".
+    2. Otherwise the first-order motion (and its reverse, for a sliding one) is followed by the
+       exponential map with growing steps (:func:`~interlock.verify.motion.finite_motion`); if the blocks
+       move clear without overlap beyond tolerance: False, "not interlocked (finite motion shown)".
+    3. Otherwise None, naming what was tried.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> from interlock.blocks import Assembly
+    >>> grid = [trimesh.creation.box(bounds=[[x, y, 0], [x + 1, y + 1, 1]]) for x in range(3) for y in range(3)]
+    >>> v = check(Assembly.from_meshes(grid), frame=[0, 1, 2, 3, 5, 6, 7, 8], order=2)
+    >>> v.interlocked, v.order, v.finite_motion.shown
+    (False, 2, True)
+    """
+    from interlock.verify.motion import finite_motion
+    from interlock.verify.second_order import second_order
+
+    first = verdict.status
+    second = second_order(assembly, frame=verdict.frame, contacts=contacts)
+    verdict = dataclasses.replace(verdict, order=2, second_order=second)
+    if second.blocked:
+        return dataclasses.replace(verdict, interlocked=True, status=f"{second.status}; first order: {first}")
+    tried, shown = [f"second order: {second}"], None
+    if verdict.motion is not None:
+        candidates = [verdict.motion] + ([-verdict.motion] if verdict.motion_kind == "sliding" else [])
+        for motion in candidates:
+            shown = finite_motion(assembly, motion, frame=verdict.frame)
+            if shown.shown:
+                return dataclasses.replace(verdict, interlocked=False, finite_motion=shown,
+                                           status=f"finite motion shown: {shown.message}; first order: {first}")
+            tried.append(f"finite motion: {shown.message}")
+    else:
+        tried.append("no first-order motion to follow")
+    return dataclasses.replace(verdict, interlocked=None, finite_motion=shown,
+                               status=f"inconclusive beyond first order ({first}): " + "; ".join(tried))
 
 
 @contextmanager

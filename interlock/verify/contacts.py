@@ -128,9 +128,40 @@ class Contact:
     planar: bool = True
     separation: float = 0.0
 
+    @classmethod
+    def at_points(cls, i: int, j: int, normal, points) -> Contact:
+        """A point or line contact given by hand: block ``j``'s points ``points`` on block ``i``'s face.
+
+        :func:`contacts` finds face-to-face contacts only (Remark 3.11); a
+        corner or an edge of block ``j`` resting on a face of block ``i``
+        (outward unit ``normal``, towards ``j``) gives one row of the
+        interlocking matrix per point, and the gap function of
+        :mod:`interlock.verify.second_order` (an n-pod leg, ``docs/npod.md``).
+
+        >>> c = Contact.at_points(0, 1, [0, 0, 1], [[0, 0, 0], [1, 0, 0]])
+        >>> len(c.vertices), c.area
+        (2, 0.0)
+        """
+        if not (isinstance(i, (int, np.integer)) and isinstance(j, (int, np.integer)) and 0 <= i < j):
+            raise ContactError(f"a contact needs block indices 0 <= i < j, got {i!r}, {j!r}")
+        n = np.asarray(normal, dtype=float).reshape(-1)
+        vertices = np.asarray(points, dtype=float).reshape(-1, 3) if np.size(points) else np.zeros((0, 3))
+        if n.shape != (3,) or not np.isfinite(n).all() or not np.linalg.norm(n) > 0:
+            raise ContactError(f"normal must be a non-zero finite 3D vector, got {normal!r}")
+        if not len(vertices) or not np.isfinite(vertices).all():
+            raise ContactError("points must be one or more finite 3D points, shape (k, 3)")
+        n = n / np.linalg.norm(n)
+        basis = _bases(n[None])[0]
+        origin = vertices.mean(axis=0)
+        for array in (n, vertices, origin, basis):
+            array.setflags(write=False)
+        return cls(int(i), int(j), n, vertices, 0.0, -1, -1, shapely.Polygon(), origin, basis)
+
     @property
     def ring_sizes(self) -> tuple[int, ...]:
         """Vertex counts of the exterior ring and of each hole, in the order of :attr:`vertices`."""
+        if self.polygon.is_empty:  # a point or line contact (:meth:`at_points`)
+            return (len(self.vertices),)
         rings = [self.polygon.exterior, *self.polygon.interiors]
         return tuple(len(ring.coords) - 1 for ring in rings)
 

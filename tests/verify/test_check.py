@@ -233,7 +233,10 @@ def test_progress_reports_every_stage_in_order():
     v = check(presets.interlocking_cubes(), certify=True, progress=seen.append)
     from interlock.verify.check import STAGES
 
-    assert tuple(seen) == STAGES and tuple(v.timings) == STAGES
+    assert tuple(seen) == STAGES[:-1] and tuple(v.timings) == STAGES[:-1]  # interlocked: nothing beyond
+    seen.clear()
+    v = check(presets.cube_grid(), order=2, progress=seen.append)
+    assert tuple(seen) == STAGES[:-2] + ("beyond",) and v.order == 2
     seen.clear()
     check(presets.cube_grid(), validate=False, progress=seen.append)
     assert seen == ["contacts", "matrix", "rank", "lp"]
