@@ -295,7 +295,7 @@ def beyond_first_order(assembly: Assembly, verdict: Verdict, *, contacts=None) -
             shown = finite_motion(assembly, motion, frame=verdict.frame)
             if shown.shown:
                 return dataclasses.replace(verdict, interlocked=False, finite_motion=shown,
-                                           status=f"finite motion shown: {shown.message}; first order: {first}")
+                                           status=f"{shown.message}; first order: {first}")
             tried.append(f"finite motion: {shown.message}")
     else:
         tried.append("no first-order motion to follow")

@@ -312,7 +312,7 @@ def _reduce(A: Symbol, at_points) -> _Reduction:
                 return ending("no kernel", "interlocked", "the forced rows admit no motion of finite support")
             constant = _real_basis(kernels[0]) if _same_real_subspace(*kernels) else None
             if constant is not None and _keeps_all(at_points, basis @ constant):
-                return ending("cell motion", "not interlocked", "one cell can move and keep every contact: a "
+                return ending("cell motion", "not interlocked", "one cell has a first-order motion that keeps every contact: a "
                               "sliding motion of finite support", basis @ constant[:, 0])
             if forced.all():
                 return ending("fact 1", "not interlocked", "every row is forced and A(z) keeps a kernel: a sliding "
