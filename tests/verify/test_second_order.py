@@ -209,3 +209,20 @@ def test_hand_made_contacts_are_checked():
         Contact.at_points(0, 1, [0, 0, 0], [[0, 0, 0]])
     with pytest.raises(ContactError, match="one or more"):
         Contact.at_points(0, 1, [0, 0, 1], [])
+
+
+def test_example_3_7_the_versatile_blocks_move_apart_at_order_2():
+    pair = presets.versatile_blocks()
+    first = check(pair)
+    assert first.interlocked is False and "can move" not in first.status and "first-order motion" in first.status
+    v = check(pair, order=2)
+    assert v.interlocked is False and v.finite_motion.shown and v.moving == (1,)
+    assert v.second_order.blocked is False  # one triangle contact: its planar slides keep every gap at zero
+
+
+@pytest.mark.parametrize("name, frame", [("cube_grid", None), ("versatile_blocks", None),
+                                         ("interlocking_cubes", [0]), ("modified_cube_assembly", [])])
+def test_a_first_order_status_never_claims_that_blocks_can_move(name, frame):
+    v = check(getattr(presets, name)(), frame=frame)
+    assert v.interlocked is False and v.order == 1 and v.finite_motion is None
+    assert "can move" not in v.status and "first-order motion" in v.status
