@@ -168,7 +168,7 @@ def twist_exponential(twists, centres, s: float) -> np.ndarray:
 
 
 def moved(assembly: Assembly, motion, s: float, frame=None) -> Assembly:
-    """The assembly with its blocks moved to parameter ``s`` of a motion (twists or a path, as in :func:`finite_motion`).
+    """The assembly with its blocks moved to parameter ``s`` of a motion (twists or a path, see :func:`finite_motion`).
 
     Block ``k``'s placement ``T_k`` becomes ``M_k(s) T_k`` for the world
     transform ``M_k(s)``; meshes, labels, frame and lattice are kept.
@@ -279,13 +279,12 @@ def finite_motion(assembly: Assembly, motion, *, frame=None, span=None, overlap_
     """
     started = time.perf_counter()
     if not isinstance(assembly, Assembly):
-        raise MotionError(f"finite_motion needs an Assembly (see interlock.blocks.Assembly), got {type(assembly).__name__}")
+        raise MotionError(f"finite_motion needs an Assembly (interlock.blocks.Assembly), got {type(assembly).__name__}")
     fixed = _frame(assembly, frame)
     overlap_rtol = _number(overlap_rtol, "overlap_rtol", positive=False)
     reach_rtol = _number(reach_rtol, "reach_rtol")
     separation_rtol = _number(separation_rtol, "separation_rtol", positive=False)
-    if isinstance(steps, (bool, np.bool_)) or not isinstance(steps, (int, np.integer)) or steps < 1:
-        raise MotionError(f"steps must be an integer >= 1, got {steps!r}")
+    steps = _count(steps, "steps")
     small = tuple(_number(f, "each of small_steps") for f in np.atleast_1d(np.asarray(small_steps, dtype=object)))
     size = assembly.scale
     reach, gap = reach_rtol * size, separation_rtol * size
@@ -330,9 +329,11 @@ def finite_motion(assembly: Assembly, motion, *, frame=None, span=None, overlap_
                         path.twists, assembly, path)
 
 
-def export_motion(result: FiniteMotion, folder, frames: int = 8, format: str = "stl") -> list[Path]:
+def export_motion(assembly: Assembly, result: FiniteMotion, folder, frames: int = 8, format: str = "stl") -> list[Path]:
     """Write the assembly at ``frames`` evenly spaced parameters of a :class:`FiniteMotion`, one file per frame.
 
+    ``assembly`` is the one the motion was found for (the result's own, or
+    one with the same blocks, such as a re-loaded copy).
     Frames run from the start of the motion to its last measured step (the
     collision, when there was one).  Mesh formats go through
     :func:`interlock.gallery.export` (one file holding every block, which
@@ -347,14 +348,17 @@ def export_motion(result: FiniteMotion, folder, frames: int = 8, format: str = "
     >>> cubes = Assembly.from_meshes([trimesh.creation.box(bounds=[[x, 0, 0], [x + 1, 1, 1]]) for x in range(2)])
     >>> result = finite_motion(cubes, [[0, 0, 0, 0, 0, 0], [0, 0, 0, 1, 0, 0]], frame=[0])
     >>> with tempfile.TemporaryDirectory() as folder:
-    ...     paths = export_motion(result, folder, frames=3)
+    ...     paths = export_motion(cubes, result, folder, frames=3)
     ...     [p.name for p in paths], len(Assembly.load(paths[-1]))
     (['frame_000.stl', 'frame_001.stl', 'frame_002.stl'], 2)
     """
-    if not isinstance(result, FiniteMotion) or result.assembly is None:
+    if not isinstance(result, FiniteMotion) or result.path is None:
         raise MotionError(f"export_motion needs the FiniteMotion of finite_motion, got {type(result).__name__}")
-    if isinstance(frames, (bool, np.bool_)) or not isinstance(frames, (int, np.integer)) or frames < 1:
-        raise MotionError(f"frames must be an integer >= 1, got {frames!r}")
+    if not isinstance(assembly, Assembly) or len(assembly) != len(result.path(result.start)):
+        got = f"{len(assembly)} blocks" if isinstance(assembly, Assembly) else type(assembly).__name__
+        raise MotionError(f"export_motion needs the Assembly of the motion ({len(result.path(result.start))} blocks), "
+                          f"got {got}")
+    frames = _count(frames, "frames")
     kind = str(format).lower().lstrip(".")
     if kind not in FRAME_FORMATS:
         raise MotionError(f"unknown frame format {format!r}; choose one of {', '.join(FRAME_FORMATS)}")
@@ -369,11 +373,8 @@ def export_motion(result: FiniteMotion, folder, frames: int = 8, format: str = "
     written = []
     for k, s in enumerate(np.linspace(result.start, last, frames) if frames > 1 else [last]):
         target = folder / f"frame_{k:03d}.{kind}"
-        assembly = result.assembly_at(float(s))
-        if kind == "png":
-            written.append(render(assembly, target, title=f"s = {s:.4g}"))
-        else:
-            written.append(export(assembly, target))
+        at = moved(assembly, result.path, float(s))
+        written.append(render(at, target, title=f"s = {s:.4g}") if kind == "png" else export(at, target))
     return written
 
 
@@ -399,10 +400,9 @@ def _path(assembly: Assembly, motion, fixed, span, reach=None, check_start=True)
         path = _Path(lambda s: _checked_transforms(motion(s), s, n, fixed, assembly.scale), start, stop, "path")
         if not check_start:
             return path
-        first = path(start)
-        off = np.abs(first - np.eye(4)) / np.array([1, 1, 1, assembly.scale])
+        off = _offset(path(start), assembly.scale)
         if off.max() > IDENTITY_RTOL:
-            block = int(np.argmax(off.reshape(n, -1).max(axis=1)))
+            block = int(np.argmax(off))
             raise MotionError(f"the path must start at the identity (the assembly as given), but at s = {start:g} "
                               f"it moves block {block}; shift the span or the path")
         return path
@@ -411,7 +411,8 @@ def _path(assembly: Assembly, motion, fixed, span, reach=None, check_start=True)
     try:
         twists = np.array(motion, dtype=float)
     except (TypeError, ValueError):
-        raise MotionError(f"motion must be an (n_blocks, 6) array of twists or a callable, got {type(motion).__name__}") from None
+        raise MotionError("motion must be an (n_blocks, 6) array of twists or a callable, "
+                          f"got {type(motion).__name__}") from None
     if twists.shape != (n, 6):
         raise MotionError(f"motion must have shape ({n}, 6): one twist (omega, t) per block, got {twists.shape}")
     if not np.isfinite(twists).all():
@@ -436,7 +437,8 @@ def _checked_transforms(value, s, n, fixed, size) -> np.ndarray:
     except (TypeError, ValueError):
         raise MotionError(f"the path returned {type(value).__name__} at s = {s:g}, not an ({n}, 4, 4) array") from None
     if T.shape != (n, 4, 4):
-        raise MotionError(f"the path must return ({n}, 4, 4) world transforms (one per block), got {T.shape} at s = {s:g}")
+        raise MotionError(f"the path must return ({n}, 4, 4) world transforms (one per block), "
+                          f"got {T.shape} at s = {s:g}")
     if not np.isfinite(T).all():
         raise MotionError(f"the path returned transforms that are not finite numbers at s = {s:g}")
     R = T[:, :3, :3]
@@ -445,8 +447,8 @@ def _checked_transforms(value, s, n, fixed, size) -> np.ndarray:
     if bad.any():
         raise MotionError(f"the path's transform of block {int(np.flatnonzero(bad)[0])} at s = {s:g} is not a rigid "
                           "motion (a rotation with determinant +1 and a translation, last row 0 0 0 1)")
-    off = np.abs(T - np.eye(4)) / np.array([1, 1, 1, size])
-    moved_frame = [b for b in fixed if off[b].max() > IDENTITY_RTOL]
+    off = _offset(T, size)
+    moved_frame = [b for b in fixed if off[b] > IDENTITY_RTOL]
     if moved_frame:
         raise MotionError(f"the path moves frame block(s) {', '.join(map(str, moved_frame[:8]))} at s = {s:g}; "
                           "frame blocks are fixed: give them the identity, or another frame")
@@ -457,10 +459,13 @@ def _moving(path, grid, size) -> tuple[int, ...]:
     """The blocks a twist moves (nonzero rows), or that a path moves away from the identity somewhere on ``grid``."""
     if path.twists is not None:
         return tuple(int(b) for b in np.flatnonzero(np.any(path.twists != 0, axis=1)))
-    off = 0.0
-    for s in grid:
-        off = np.maximum(off, (np.abs(path(s) - np.eye(4)) / np.array([1, 1, 1, size])).max(axis=(1, 2)))
+    off = np.max([_offset(path(s), size) for s in grid], axis=0)
     return tuple(int(b) for b in np.flatnonzero(off > IDENTITY_RTOL))
+
+
+def _offset(T, size) -> np.ndarray:
+    """How far each transform is from the identity: largest entry of ``T - I``, translations over ``size``."""
+    return (np.abs(T - np.eye(4)) / np.array([1, 1, 1, size])).max(axis=(-2, -1))
 
 
 def _points(assembly: Assembly, blocks) -> tuple[np.ndarray, np.ndarray]:
@@ -535,19 +540,18 @@ class _Overlaps:
             mesh = a.meshes[a.types[b]]
             world = mesh.vertices @ transforms[b, :3, :3].T + transforms[b, :3, 3]
             bounds[b] = world.min(axis=0), world.max(axis=0)
-        moving = self.moving
-        still = np.ones(len(a), dtype=bool)
+        moving, still = self.moving, np.ones(len(a), dtype=bool)
         still[moving] = False
         lo, hi = bounds[:, 0], bounds[:, 1]
         meets = np.all((lo[moving, None] <= hi[None] + self.gap) & (lo[None] <= hi[moving, None] + self.gap), axis=2)
         meets[np.arange(len(moving)), moving] = False
         worst, apart = (0.0, 0.0, None), bool(still.any())  # with nothing at rest there is nothing to leave
-        done = set()
-        solids = {}
+        done, solids = set(), {}
         for r, j in zip(*np.nonzero(meets)):
             i, j = int(moving[r]), int(j)
-            if (min(i, j), max(i, j)) in done:
-                continue
+            together = not still[j] and _offset(M[i] - M[j] + np.eye(4), a.scale) <= IDENTITY_RTOL
+            if (min(i, j), max(i, j)) in done or together:
+                continue  # counted already, or two blocks moved as one: their overlap is that of the assembly given
             done.add((min(i, j), max(i, j)))
             for b in (i, j):
                 if b not in solids:
@@ -595,6 +599,12 @@ def _span(span) -> tuple[float, float]:
     return start, stop
 
 
+def _count(value, name: str) -> int:
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) or value < 1:
+        raise MotionError(f"{name} must be an integer >= 1, got {value!r}")
+    return int(value)
+
+
 def _number(value, name: str, positive: bool = True) -> float:
     if isinstance(value, (bool, np.bool_)):
         raise MotionError(f"{name} must be a number, got {value!r}")
@@ -612,11 +622,11 @@ def _message(shown, moving, collision, displacements, volumes, fractions, ending
              "blocks " + ", ".join(map(str, moving[:8])) + (f" and {len(moving) - 8} more" if len(moving) > 8 else ""))
     if not shown:
         c = collision
-        return (f"block {c.pair[0]} hits block {c.pair[1]} at s = {c.parameter:.3g} (step {c.step + 1} of {count}, displacement {c.displacement:.3g}, "
-                f"{c.displacement / size:.2g} x model size {size:.3g}): overlap {c.volume:.3g} = {c.fraction:.2g} of the "
-                f"smaller block's volume > tolerance {rtol:g}")
-    how = {"reach": "reaching the reach", "separated": "until they separate from the others",
+        return (f"block {c.pair[0]} hits block {c.pair[1]} at s = {c.parameter:.3g} (step {c.step + 1} of {count}, "
+                f"displacement {c.displacement:.3g} = {c.displacement / size:.2g} x model size {size:.3g}): "
+                f"overlap {c.volume:.3g} = {c.fraction:.2g} of the smaller block's volume > tolerance {rtol:g}")
+    how = {"reach": "reaching the reach", "separated": "until apart from every block at rest",
            "end of the path": "to the end of the path", "farthest point": "to the farthest point of the motion"}[ending]
     return (f"{names} move{'s' if len(moving) == 1 else ''} {displacements[-1]:.3g} (model size {size:.3g}) along the "
-            f"motion, {how}, with overlap at most {max(volumes):.3g} = {max(fractions):.2g} of the smaller block's volume "
-            f"(tolerance {rtol:g}) in {count} steps")
+            f"motion, {how}, with overlap at most {max(volumes):.3g} = {max(fractions):.2g} of the smaller block's "
+            f"volume (tolerance {rtol:g}) in {count} steps")

@@ -5,6 +5,7 @@ import math
 
 import numpy as np
 import pytest
+import scipy.linalg
 import trimesh
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -59,10 +60,16 @@ def test_twist_exponential_is_a_one_parameter_group_with_the_twist_as_velocity()
     # the translation is V s t, not s t: a turn about the centre c moves no point of the axis
     turn = twist_exponential([[0, 0, 2.0, 0, 0, 0]], [[1.0, 2.0, 0]], 1.3)[0]
     np.testing.assert_allclose(turn @ [1.0, 2.0, 5.0, 1.0], [1.0, 2.0, 5.0, 1.0], atol=1e-12)
-    # tiny angles (Taylor branch) agree with the closed form just above it
-    np.testing.assert_allclose(twist_exponential(twists, centres, 0.99e-4 / np.linalg.norm(twists[:, :3], axis=1).max()),
-                               twist_exponential(twists, centres, 1.01e-4 / np.linalg.norm(twists[:, :3], axis=1).max()),
-                               atol=1e-5)
+    # the matrix exponential of the se(3) element about each centre, for a finite and a tiny (Taylor) angle
+    for s in (1.3, 0.5e-4 / np.linalg.norm(twists[:, :3], axis=1).max()):
+        for k in range(5):
+            xi = np.zeros((4, 4))
+            xi[:3, :3] = np.cross(twists[k, :3], np.eye(3)).T  # [omega]_x: column j is omega x e_j
+            xi[:3, 3] = twists[k, 3:]
+            shift = np.eye(4)
+            shift[:3, 3] = centres[k]
+            expected = shift @ scipy.linalg.expm(s * xi) @ np.linalg.inv(shift)
+            np.testing.assert_allclose(T(s)[k], expected, atol=1e-13)
 
 
 # --- Ex. 3.7: two Versatile Blocks ---------------------------------------------------------------------
@@ -237,7 +244,7 @@ def test_grid_verdicts_do_not_depend_on_placement_or_scale(rotation, shift, scal
 def test_export_motion_writes_stl_frames_that_load_back(tmp_path):
     grid = _grid()
     result = finite_motion(grid, check(grid).motion)
-    paths = export_motion(result, tmp_path / "frames", frames=3)
+    paths = export_motion(grid, result, tmp_path / "frames", frames=3)
     assert [p.name for p in paths] == ["frame_000.stl", "frame_001.stl", "frame_002.stl"]
     first, last = Assembly.load(paths[0]), Assembly.load(paths[-1])
     assert len(first) == len(last) == 9
@@ -248,7 +255,7 @@ def test_export_motion_writes_stl_frames_that_load_back(tmp_path):
 def test_export_motion_draws_png_frames(tmp_path):
     pytest.importorskip("matplotlib")
     pair = presets.versatile_blocks()
-    paths = export_motion(finite_motion(pair, _gamma), tmp_path, frames=2, format="png")
+    paths = export_motion(pair, finite_motion(pair, _gamma), tmp_path, frames=2, format="png")
     assert [p.suffix for p in paths] == [".png", ".png"] and all(p.stat().st_size > 0 for p in paths)
 
 
@@ -300,15 +307,19 @@ BAD = [
     (lambda g: finite_motion(g, _twists(b4=[0, 0, 0, 0, 0, 1]), span=(0, 1)), "span applies to a callable"),
     (lambda g: finite_motion(g, _twists(b4=[0, 0, 0, 0, 0, 1]), steps=0), "steps must be an integer >= 1"),
     (lambda g: finite_motion(g, _twists(b4=[0, 0, 0, 0, 0, 1]), steps=2.5), "steps must be an integer >= 1"),
-    (lambda g: finite_motion(g, _twists(b4=[0, 0, 0, 0, 0, 1]), reach_rtol=0), "reach_rtol must be a finite number > 0"),
+    (lambda g: finite_motion(g, _twists(b4=[0, 0, 0, 0, 0, 1]), reach_rtol=0), "reach_rtol must be a finite num"),
     (lambda g: finite_motion(g, _twists(b4=[0, 0, 0, 0, 0, 1]), overlap_rtol=-1), "overlap_rtol must be a finite"),
     (lambda g: finite_motion(g, _twists(b4=[0, 0, 0, 0, 0, 1]), small_steps=(1e-3, 0)), "small_steps must be a finite"),
     (lambda g: finite_motion(g, _twists(b4=[0, 0, 0, 0, 0, 1]), frame=[9]), "out of range"),
     (lambda g: finite_motion(g, _twists(b4=[0, 0, 0, 0, 0, 1]), frame=["a"]), "block indices"),
     (lambda g: finite_motion(g.meshes, _twists(b4=[0, 0, 0, 0, 0, 1])), "needs an Assembly"),
-    (lambda g: export_motion(g, "out"), "needs the FiniteMotion"),
-    (lambda g: export_motion(finite_motion(g, _twists(b4=[0, 0, 0, 0, 0, 1])), "out", frames=0), "frames must be"),
-    (lambda g: export_motion(finite_motion(g, _twists(b4=[0, 0, 0, 0, 0, 1])), "out", format="gif"), "unknown frame"),
+    (lambda g: export_motion(g, g, "out"), "needs the FiniteMotion"),
+    (lambda g: export_motion(g.meshes, finite_motion(g, _twists(b4=[0, 0, 0, 0, 0, 1])), "out"), "the Assembly"),
+    (lambda g: export_motion(presets.versatile_blocks(), finite_motion(g, _twists(b4=[0, 0, 0, 0, 0, 1])), "out"),
+     r"\(9 blocks\)"),
+    (lambda g: export_motion(g, finite_motion(g, _twists(b4=[0, 0, 0, 0, 0, 1])), "out", frames=0), "frames must be"),
+    (lambda g: export_motion(g, finite_motion(g, _twists(b4=[0, 0, 0, 0, 0, 1])), "out", format="gif"),
+     "unknown frame"),
 ]
 
 
