@@ -156,6 +156,22 @@ def test_cube_grid_pushed_sideways_collides_at_the_first_step():
     assert json.loads(json.dumps(result.to_dict()))["first_collision"]["pair"] == [4, 7]
 
 
+def test_moving_blocks_are_measured_against_each_other():
+    row = Assembly.from_meshes([trimesh.creation.box(bounds=[[x, 0, 0], [x + 1, 1, 1]]) for x in range(3)], frame=[2])
+    towards = np.zeros((3, 6))
+    towards[0, 3], towards[1, 3] = 1.0, -1.0
+    result = finite_motion(row, towards)
+    assert not result.shown and result.moving == (0, 1) and result.first_collision.pair == (0, 1)
+    assert "block 0 hits block 1" in str(result)
+    # moved as one (the same rigid motion, twists about their own centroids): their overlap is not recomputed
+    together = _about_centroid(row, 0, (0, 0, 1), (0, 0, 0), origin=(0, 0, 0)) \
+        + _about_centroid(row, 1, (0, 0, 1), (0, 0, 0), origin=(0, 0, 0))
+    apart = finite_motion(row, together)  # a counterclockwise turn about the z-axis: away from block 2
+    assert apart.shown and apart.moving == (0, 1)
+    assert str(apart).startswith("blocks 0, 1 move")
+    assert apart.timings["booleans"] <= len(apart.parameters)  # at most block 1 against block 2 per step
+
+
 # --- first order is not enough ---------------------------------------------------------------------------
 
 
