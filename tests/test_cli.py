@@ -72,6 +72,20 @@ def test_verify_reports_example_3_5(tmp_path, capsys):
     assert record["moving"] == [4] and record["blocks"][4] == "cube4.stl"
 
 
+def test_verify_order_2_shows_the_finite_motion_and_writes_its_frames(tmp_path, capsys):
+    paths = _cube_files(tmp_path, [(x, y) for x in range(3) for y in range(3)])
+    frames = tmp_path / "frames"
+    assert main(["verify", *paths, "--fixed", "0-3,5-8", "--order", "2", "--frames", str(frames)]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("not interlocked (finite motion shown): block 4 moves")
+    assert "not blocked at second order" in out and f"frames of the motion: {frames}" in out
+    assert len(list(frames.glob("*.stl"))) >= 2
+    assert main(["verify", *paths, "--fixed", "0-3,5-8", "--order", "2", "--json"]) == 0
+    record = json.loads(capsys.readouterr().out)
+    assert record["order"] == 2 and record["finite_motion"]["shown"] is True
+    assert record["second_order"]["blocked"] is False
+
+
 @pytest.mark.parametrize("argv_tail,message", [
     (["--fixed", "x"], "cannot read block list 'x'"),
     (["--fixed", "7"], "frame index 7 is out of range for 2 blocks"),

@@ -15,7 +15,11 @@ from interlock.verify.matrix import InterlockingMatrix, interlocking_matrix
 from interlock.verify.stability import StabilityResult, critical_tilt, rbe
 from interlock.verify.cra import CRAResult, cra
 from interlock.verify.periodic import PeriodicVerdict, edge_quadruples, periodic_check, symbol
+from interlock.verify.second_order import SecondOrder, prestress_stability, second_order
+from interlock.verify.motion import FiniteMotion, MotionError, export_motion, finite_motion, moved, twist_exponential
 
 __all__ = ["Contact", "contacts", "CriterionResult", "criterion_4_3", "InterlockingMatrix", "interlocking_matrix",
            "Verdict", "check", "PeriodicVerdict", "edge_quadruples", "periodic_check", "symbol",
-           "StabilityResult", "rbe", "critical_tilt", "CRAResult", "cra"]
+           "StabilityResult", "rbe", "critical_tilt", "CRAResult", "cra",
+           "SecondOrder", "prestress_stability", "second_order",
+           "FiniteMotion", "MotionError", "export_motion", "finite_motion", "moved", "twist_exponential"]

@@ -287,11 +287,16 @@ def test_example_3_7_versatile_blocks_share_the_papers_triangle():
     assert {tuple(p) for p in contact.vertices.round(12) + 0.0} == {(0, 0, 0), (0, -1, 1), (0, 1, 1)}
     assert contact.area == pytest.approx(1.0)
     # Ex. 3.7: (p x n, n) . gamma'(0) >= 0 at the three points, = 0 at (0, -1, 1) and (0, 1, 1)
-    velocity = np.array([0, -1, 0, 1, 0, 2])
+    velocity = np.array([0, -1, 0, 1, 0, 2])  # as printed; d/dt of gamma's translation at 0 is (1, 0, 1)
+    t = 1e-6  # the printed z-entry 2 is a misprint: differentiate gamma(t) itself
+    assert (math.cos(t) * (t - 1) + 1 - 0) / t == pytest.approx(1, abs=1e-5)
     values = {tuple(np.round(p, 9) + 0.0): np.r_[np.cross(p, contact.normal), contact.normal] @ velocity
               for p in contact.vertices}
     assert values[(0, -1, 1)] == pytest.approx(0) and values[(0, 1, 1)] == pytest.approx(0)
     assert values[(0, 0, 0)] > 0
+    derived = velocity - [0, 0, 0, 0, 0, 1]  # the true gamma'(0) satisfies the same (in)equalities
+    assert [np.r_[np.cross(p, contact.normal), contact.normal] @ derived for p in contact.vertices] == \
+        pytest.approx([values[tuple(np.round(p, 9) + 0.0)] for p in contact.vertices])
 
 
 @pytest.mark.parametrize("t", [0.25, 0.5, 1.0])
