@@ -9,8 +9,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from interlock import InterlockError
-from interlock.verify.npod import (NPodError, bond_conditions, leg_rows, mobility, npod, projection_bonds,
-                                   self_motion)
+from interlock.verify.npod import NPodError, leg_rows, mobility, npod, self_motion
+from interlock.verify.npod_bonds import bond_conditions, projection_bonds
 
 I = [[1, 0, 0], [0, 1, 0], [0, 0, 1]]
 
