@@ -17,9 +17,13 @@ from interlock.verify.cra import CRAResult, cra
 from interlock.verify.periodic import PeriodicVerdict, edge_quadruples, periodic_check, symbol
 from interlock.verify.second_order import SecondOrder, prestress_stability, second_order
 from interlock.verify.motion import FiniteMotion, MotionError, export_motion, finite_motion, moved, twist_exponential
+from interlock.verify.npod import Mobility, NPod, NPodError, SelfMotion, leg_rows, mobility, npod, self_motion
+from interlock.verify.npod_bonds import BondConditions, BondSearch, ProjectionBond, bond_conditions, projection_bonds
 
 __all__ = ["Contact", "contacts", "CriterionResult", "criterion_4_3", "InterlockingMatrix", "interlocking_matrix",
            "Verdict", "check", "PeriodicVerdict", "edge_quadruples", "periodic_check", "symbol",
            "StabilityResult", "rbe", "critical_tilt", "CRAResult", "cra",
            "SecondOrder", "prestress_stability", "second_order",
-           "FiniteMotion", "MotionError", "export_motion", "finite_motion", "moved", "twist_exponential"]
+           "FiniteMotion", "MotionError", "export_motion", "finite_motion", "moved", "twist_exponential",
+           "NPod", "NPodError", "npod", "leg_rows", "Mobility", "mobility", "SelfMotion", "self_motion",
+           "BondConditions", "bond_conditions", "ProjectionBond", "BondSearch", "projection_bonds"]
