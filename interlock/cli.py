@@ -70,7 +70,8 @@ def _parser() -> argparse.ArgumentParser:
                         help="2: take a verdict that is not 'interlocked' to second order and try the motion "
                              "as a finite one (default 1: first order)")
     verify.add_argument("--frames", metavar="FOLDER",
-                        help="with --order 2: write pictures of a finite motion shown into FOLDER")
+                        help="with --order 2: write a finite motion shown into FOLDER, frame by frame "
+                             "(STL, and PNG with the plot extra)")
     verify.add_argument("--json", action="store_true", help="print JSON instead of text")
     verify.set_defaults(run=_run_verify)
 
@@ -242,10 +243,15 @@ def _run_verify(args) -> int:
 
         verdict = check(assembly, translational=args.translational, certify=args.certify, progress=announce,
                         order=args.order)
+    frames = []
     if args.frames and verdict.finite_motion is not None and verdict.finite_motion.shown:
+        import importlib.util
+
         from interlock.verify.motion import export_motion
 
-        export_motion(assembly, verdict.finite_motion, args.frames)
+        frames = export_motion(assembly, verdict.finite_motion, args.frames)
+        if importlib.util.find_spec("matplotlib") is not None:  # pictures too, with the plot extra
+            frames += export_motion(assembly, verdict.finite_motion, args.frames, format="png")
     if args.json:
         record = verdict.to_dict()
         record["blocks"] = [str(label) for label in assembly.labels]
@@ -263,8 +269,9 @@ def _run_verify(args) -> int:
         print(verdict.second_order)
     if verdict.finite_motion is not None:
         print(f"finite motion: {verdict.finite_motion.message}")
-        if args.frames and verdict.finite_motion.shown:
-            print(f"frames of the motion: {args.frames}")
+        if frames:
+            kinds = " and ".join(sorted({p.suffix[1:].upper() for p in frames}))
+            print(f"frames of the motion: {len(frames)} {kinds} files in {args.frames}")
     timings = ", ".join(f"{name} {seconds:.3f}s" for name, seconds in verdict.timings.items())
     print(f"timings: {timings}")
     return 0

@@ -78,8 +78,8 @@ def test_verify_order_2_shows_the_finite_motion_and_writes_its_frames(tmp_path, 
     assert main(["verify", *paths, "--fixed", "0-3,5-8", "--order", "2", "--frames", str(frames)]) == 0
     out = capsys.readouterr().out
     assert out.startswith("not interlocked (finite motion shown): block 4 moves")
-    assert "not blocked at second order" in out and f"frames of the motion: {frames}" in out
-    assert len(list(frames.glob("*.stl"))) >= 2
+    assert "not blocked at second order" in out and f"frames of the motion: 16 PNG and STL files in {frames}" in out
+    assert len(list(frames.glob("*.stl"))) == len(list(frames.glob("*.png"))) == 8
     assert main(["verify", *paths, "--fixed", "0-3,5-8", "--order", "2", "--json"]) == 0
     record = json.loads(capsys.readouterr().out)
     assert record["order"] == 2 and record["finite_motion"]["shown"] is True
