@@ -4,7 +4,6 @@ import math
 
 import numpy as np
 import pytest
-import shapely
 import trimesh
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -135,38 +134,9 @@ def test_bad_constraints_are_refused_with_a_clear_message():
 # --- assemblies ------------------------------------------------------------------------------------
 
 
-def _cup_assembly(h=1.0, c=2.0):
-    """The cup of ``_cup_constraints`` as meshes: a V-valley prism, wedge pins touching it along lines
-    and points (contacts given by hand: contacts() finds face-to-face contacts only)."""
-    top = 0.5 / h
-    section = shapely.Polygon([(-2, -c), (2, -c), (2, top), (1.5, top), (0, -1 / h), (-1.5, top), (-2, top)])
-    prism = trimesh.creation.extrude_polygon(section, 2.0)
-    prism.apply_transform(trimesh.transformations.rotation_matrix(np.pi / 2, [1, 0, 0]))
-    prism.apply_translation([0, 1, 0])
-    a = math.hypot(1, h)
-
-    def wedge(p, direction, side, axis=(0, 1, 0), half=0.5):
-        p, d, s, ax = (np.asarray(v, float) for v in (p, direction, side, axis))
-        corners = [p, p + 0.3 * (d + s), p + 0.3 * (d - s)]
-        return trimesh.convex.convex_hull(np.array([x + e * half * ax for x in corners for e in (-1, 1)]))
-
-    n1, n2, down = np.array([1, 0, h]) / a, np.array([-1, 0, h]) / a, np.array([0, 0, -1.0])
-    pins = [wedge((-1, 0, 0), n1, np.array([h, 0, -1]) / (2 * a)), wedge((1, 0, 0), n2, np.array([h, 0, 1]) / (2 * a)),
-            wedge((0, 0, -c), down, (0.5, 0, 0))]
-    found = [Contact.at_points(0, 1, n1, [[-1, -0.5, 0], [-1, 0.5, 0]]),
-             Contact.at_points(0, 2, n2, [[1, -0.5, 0], [1, 0.5, 0]]),
-             Contact.at_points(0, 3, down, [[0, -0.5, -c], [0, 0.5, -c]])]
-    for x in (-0.5, 0.5):
-        for y in (-1, 1):
-            point, out = np.array([x, y, -c / 2]), np.array([0, y, 0.0])
-            pins.append(wedge(point, out, (0.1, 0, 0), axis=(0, 0, 1), half=0.05))
-            found.append(Contact.at_points(0, len(pins), out, [point]))
-    return Assembly.from_meshes([prism, *pins], frame=range(1, len(pins) + 1)), found
-
-
 @pytest.mark.parametrize("h, c", [(1, 2), (2, 0.6)])
 def test_check_order_2_proves_the_cup_interlocked_at_second_order(h, c):
-    cup, found = _cup_assembly(h, c)
+    cup, found = presets.block_on_pins(h, c)
     first = check(cup, contacts=found)
     assert first.interlocked is False and first.rank == 5 and first.motion_kind == "sliding"
     assert "first-order motion" in first.status and first.order == 1 and first.second_order is None
@@ -195,6 +165,11 @@ def test_check_order_2_shows_the_grid_cube_sliding_out():
     assert v.interlocked is False and v.finite_motion.shown and v.moving == (4,)
     assert str(v).startswith("not interlocked (finite motion shown)")
     assert v.to_dict()["finite_motion"]["shown"] is True
+
+
+def test_block_on_pins_needs_its_valley_above_its_bottom():
+    with pytest.raises(InterlockError, match="h c > 1"):
+        presets.block_on_pins(1.0, 0.5)
 
 
 def test_check_refuses_other_orders():
