@@ -11,7 +11,7 @@ from tests.conftest import SHARED_DATA
 
 ROOT = Path(__file__).resolve().parents[1]
 NAMES = ("wallpaper", "rhomblock", "verify", "scaling", "periodic", "accuracy", "degeneracy", "gallery", "stability",
-         "sweep")
+         "sweep", "beyond")
 
 
 @pytest.fixture(scope="module")
@@ -33,6 +33,14 @@ def test_every_benchmark_writes_json_with_the_machine_and_a_chart(results):
         assert (folder / f"{name}.png").read_bytes()[:4] == b"\x89PNG", name
     # the committed full results were not touched by the quick run
     assert json.loads((ROOT / "benchmarks" / "results" / "accuracy.json").read_text())["quick"] is False
+
+
+def test_order_2_settles_every_case_of_its_benchmark(results):
+    rows = {row["case"]: row for row in results[0]["beyond"]["rows"]}
+    assert all(row["first_order"] == "not infinitesimally interlocked" for row in rows.values())
+    assert rows["block on pins, h c = 2"]["second_order"] == "interlocked (second order)"
+    assert all(row["second_order"] == "not interlocked (finite motion shown)" and row["finite_motion_steps"]
+               for name, row in rows.items() if name != "block on pins, h c = 2")
 
 
 def test_no_method_is_wrong_where_a_proof_labels_the_answer(results):
