@@ -290,8 +290,9 @@ def prestress_stability(points, normals, point_blocks, plane_blocks, centroids, 
         return SecondOrder(False, f"no stress makes the form negative definite on the {kernel.shape[1]}-dimensional "
                                   f"kernel (its largest eigenvalue is at least {bound / scale + 0.0:.3g} for every stress)",
                            **base, **found)
-    return SecondOrder(None, f"after {CUTTING_PLANES} cutting planes the best largest eigenvalue is {top / scale:.3g} "
-                             f"and the bound {bound / scale:.3g}: within the tolerance band", **base, **found)
+    bound_text = "no bound (the cutting-plane LP failed)" if bound is None else f"the bound {bound / scale:.3g}"
+    return SecondOrder(None, f"after at most {CUTTING_PLANES} cutting planes the best largest eigenvalue is "
+                             f"{top / scale:.3g} and {bound_text}: undecided within the tolerance", **base, **found)
 
 
 def second_order(assembly: Assembly, frame=None, *, contacts=None, rtol: float = SECOND_ORDER_RTOL,

@@ -201,3 +201,13 @@ def test_a_first_order_status_never_claims_that_blocks_can_move(name, frame):
     v = check(getattr(presets, name)(), frame=frame)
     assert v.interlocked is False and v.order == 1 and v.finite_motion is None
     assert "can move" not in v.status and "first-order motion" in v.status
+
+
+def test_without_cutting_planes_an_unblocked_turn_is_undecided(monkeypatch):
+    import sys
+
+    module = sys.modules["interlock.verify.second_order"]
+    monkeypatch.setattr(module, "CUTTING_PLANES", 0)
+    points, normals, p, q = _cup_constraints(1, 0.5)
+    r = prestress_stability(points, normals, p, q, np.zeros((11, 3)), free=[0])
+    assert r.blocked is None and "undecided" in r.status and r.bound is None
