@@ -40,7 +40,8 @@ def run(spec, output=None, executor=None, workers: int | None = None, resume: bo
     resume : bool
         Keep the records already in ``output`` and evaluate only the missing points.
     progress : callable, optional
-        Called with the number of points finished by each chunk.
+        Called with the number of points finished by each chunk; when resuming, first with the number
+        of points kept from ``output`` (so that a progress bar over all points reaches its total).
 
     Examples
     --------
@@ -56,6 +57,8 @@ def run(spec, output=None, executor=None, workers: int | None = None, resume: bo
     done = {} if writer is None else {r["index"]: r for r in writer.records}
     todo = [(i, p) for i, p in enumerate(spec.points()) if i not in done]
     chunks = [todo[k:k + spec.chunk] for k in range(0, len(todo), spec.chunk)]
+    if done and progress is not None:
+        progress(len(done))
     owned = executor is None
     if owned:
         executor = ProcessPoolExecutor(max_workers=workers or os.cpu_count())

@@ -135,7 +135,7 @@ def test_output_round_trips_and_resume_evaluates_only_missing_points(tmp_path, s
     assert read_records(path) == first
     done = []
     second = _threads(P1, output=path, resume=True, progress=done.append)
-    assert sum(done) == 2  # the two points of s = 0.2; the first four kept as they were
+    assert done[0] == 4 and sum(done[1:]) == 2  # four kept (reported first), the two points of s = 0.2 evaluated
     assert second[:4] == first and read_records(path) == second
     with pytest.raises(SweepError, match="exists: resume it"):
         _threads(P1, output=path)
@@ -158,7 +158,7 @@ def test_resume_after_a_killed_run_repeats_no_finished_point(tmp_path):
     assert 3 <= len(before) < 35, "the run should be killed part-way"
     evaluated = []
     after = run(spec_path, out, workers=2, resume=True, progress=evaluated.append)
-    assert sum(evaluated) == 35 - len(before)
+    assert evaluated[0] == len(before) and sum(evaluated[1:]) == 35 - len(before)  # kept first, then the rest
     assert [r["index"] for r in after] == list(range(35))
     kept = {r["index"]: r for r in after}
     assert all(kept[r["index"]] == r for r in before)  # same seconds too: not evaluated again
