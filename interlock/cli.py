@@ -334,6 +334,7 @@ def _run_gallery(args) -> int:
     from tqdm import tqdm
 
     from interlock.gallery import build, entries
+    from interlock.gallery.builder import finite_word
 
     total = len(entries(args.quick, args.seed))
     with tqdm(total=total, desc="gallery", unit="entry", disable=None) as bar:
@@ -342,13 +343,13 @@ def _run_gallery(args) -> int:
             bar.update(1)
 
         gallery = build(args.out, quick=args.quick, seed=args.seed, progress=advance)
-    print(f"{'entry':34} {'blocks':>6}  {'finite':16} {'periodic':16} {'claims':8} {'seconds':>7}")
+    print(f"{'entry':34} {'blocks':>6}  {'finite':23} {'periodic':16} {'claims':8} {'seconds':>7}")
     for result in gallery.entries:
         r = result.record
-        finite = {True: "interlocked", False: "not interlocked", None: "inconclusive"}[r["finite"]["interlocked"]]
+        finite = finite_word(r)
         periodic = r["periodic"]["status"] if r["periodic"] else "-"
         agree = sum(c["holds"] is True for c in r["claims"])
-        print(f"{result.name:34} {r['blocks']:>6}  {finite:16} {periodic:16} {agree}/{len(r['claims']):<6} "
+        print(f"{result.name:34} {r['blocks']:>6}  {finite:23} {periodic:16} {agree}/{len(r['claims']):<6} "
               f"{sum(r['timings'].values()):7.2f}")
     print(f"{len(gallery.entries)} entries in {gallery.seconds:.1f} s: {gallery.index}")
     for line in gallery.contradictions:

@@ -20,13 +20,18 @@ from interlock.errors import GalleryError
 from interlock.gallery.export import export
 from interlock.gallery.render import render
 from interlock.verify import check, criterion_4_3, periodic_check
+from interlock.verify.check import beyond_first_order
+from interlock.verify.motion import export_motion
 
-__all__ = ["Claim", "Entry", "EntryResult", "Gallery", "entries", "build", "ESCHER_GROUPS", "REFLECTION_GROUPS"]
+__all__ = ["Claim", "Entry", "EntryResult", "Gallery", "entries", "build", "finite_word", "ESCHER_GROUPS",
+           "REFLECTION_GROUPS", "MOTION_FRAMES"]
 
 #: Escher blocks with rotations only (main paper Sec. 3.2, Fig. 1 and Fig. 5).
 ESCHER_GROUPS = ("p1", "p2", "p3", "p4", "p6")
 #: Escher blocks of groups with reflections or glides; mirror edges stay straight.
 REFLECTION_GROUPS = ("pm", "pg", "cm", "pmg", "pgg")
+#: Pictures of a finite motion shown (order 2), from its start to its last step.
+MOTION_FRAMES = 4
 
 
 @dataclass(frozen=True)
@@ -180,8 +185,16 @@ def _periodic_is(status: str, source: str, key: str = "periodic") -> Claim:
 
 def _finite_is(interlocked: bool, source: str) -> Claim:
     word = "interlocked" if interlocked else "not interlocked"
-    return Claim(source, f"the finite assembly with its frame is {word}",
-                 lambda r: None if r["finite"]["interlocked"] is None else r["finite"]["interlocked"] is interlocked)
+    return Claim(source, f"the finite assembly with its frame is {word}", lambda r: _finite_verdict(r, interlocked))
+
+
+def _finite_verdict(record: dict, interlocked: bool) -> bool | None:
+    """Whether the record settles the finite assembly as ``interlocked``: first order proves "interlocked";
+    only a finite motion shown (order 2) proves "not interlocked"."""
+    settled = record["finite"]["interlocked"]
+    if settled is not True:
+        settled = _record_value(record, "beyond", "interlocked")
+    return None if settled is None else settled is interlocked
 
 
 def _no_sliding_iff_criterion() -> Claim:
@@ -350,8 +363,15 @@ def _build_entry(entry: Entry, folder: Path, seed: int) -> EntryResult:
               "blocks": len(assembly), "frame": list(assembly.frame)}
 
     clock = time.perf_counter()
-    record["finite"] = check(assembly, validate=False).to_dict()
+    first = check(assembly, validate=False)
+    record["finite"] = first.to_dict()
     timings["finite_verdict"] = time.perf_counter() - clock
+    beyond = record["beyond"] = None  # a first-order motion taken to second order and tried as a finite one
+    if first.interlocked is not True:
+        clock = time.perf_counter()
+        beyond = beyond_first_order(assembly, first)
+        record["beyond"] = beyond.to_dict()
+        timings["beyond_first_order"] = time.perf_counter() - clock
     record["periodic"] = record["periodic_translational"] = record["criterion_4_3"] = None
     if "cell" in made:
         clock = time.perf_counter()
@@ -379,6 +399,10 @@ def _build_entry(entry: Entry, folder: Path, seed: int) -> EntryResult:
         pictures["tiling.png"] = (made["tiling"], {"view": "tiling", "size": (10.0, 5.0) if wide else (6.0, 6.0)})
     for name, (obj, options) in pictures.items():
         written[name] = _relative(render(obj, directory / name, title=None, **options), folder)
+    if beyond is not None and beyond.finite_motion is not None and beyond.finite_motion.shown:
+        frames = export_motion(assembly, beyond.finite_motion, directory / "motion", frames=MOTION_FRAMES,
+                               format="png")
+        written.update({f"motion {k}.png": _relative(path, folder) for k, path in enumerate(frames)})
     timings["render"] = time.perf_counter() - clock
 
     claims, contradictions = [], []
@@ -435,6 +459,14 @@ def _write_index(folder: Path, results, quick: bool, seed: int) -> Path:
     return index
 
 
+def finite_word(record: dict) -> str:
+    """The finite verdict in words: first order, or beyond it when first order did not prove it interlocked."""
+    if record["finite"]["interlocked"] is True:
+        return "interlocked"
+    beyond = record.get("beyond") or {}
+    return {True: "interlocked (2nd order)", False: "not interlocked", None: "inconclusive"}[beyond.get("interlocked")]
+
+
 def _verdict_word(value) -> str:
     if value in (True, "interlocked"):
         return "<span class='yes'>interlocked</span>"
@@ -445,8 +477,12 @@ def _verdict_word(value) -> str:
 
 def _entry_html(result: EntryResult) -> str:
     r, e = result.record, html.escape
+    first = _verdict_word(r["finite"]["interlocked"]).replace(">not interlocked<", ">not infinitesimally interlocked<")
     rows = [f"<tr><th>finite ({r['blocks']} blocks, {len(r['frame'])} fixed)</th><td>"
-            f"{_verdict_word(r['finite']['interlocked'])} — {e(r['finite']['status'])}</td></tr>"]
+            f"{first} — {e(r['finite']['status'])}</td></tr>"]
+    if r.get("beyond"):
+        word = _verdict_word(r["beyond"]["interlocked"]).replace(">interlocked<", ">interlocked (second order)<")
+        rows.append(f"<tr><th>beyond first order</th><td>{word} — {e(r['beyond']['status'])}</td></tr>")
     for key, label in (("periodic", "infinite (periodic)"), ("periodic_translational", "infinite, translations")):
         if r.get(key):
             rows.append(f"<tr><th>{label}</th><td>{_verdict_word(r[key]['status'])} — {e(r[key]['reason'])}</td></tr>")

@@ -87,6 +87,11 @@ def test_verdicts_are_the_papers(gallery):
     # Ex. 3.5: the cube grid slides, finite and infinite
     grid = by_name["ex3.5-cube-grid"]
     assert grid["finite"]["interlocked"] is False and grid["finite"]["motion_kind"] == "sliding"
+    assert grid["beyond"]["interlocked"] is False and grid["beyond"]["finite_motion"]["shown"] is True
+    assert by_name["escher-p4"]["beyond"] is None  # interlocked at first order: nothing beyond
+    motion = [name for name in next(r for r in gallery.entries if r.name == "ex3.5-cube-grid").files
+              if name.startswith("motion")]
+    assert len(motion) == 4  # pictures of the cube sliding out
     assert grid["periodic"]["status"] == "not interlocked"
     # Thm. 4.9: RhomBlocks on a hexagon with the ring fixed, and on a periodic staircase
     assert by_name["rhomblock-hexagon-3x3x3-v0"]["finite"]["interlocked"] is True
