@@ -627,6 +627,7 @@ def _message(shown, moving, collision, displacements, volumes, fractions, ending
                 f"overlap {c.volume:.3g} = {c.fraction:.2g} of the smaller block's volume > tolerance {rtol:g}")
     how = {"reach": "reaching the reach", "separated": "until apart from every block at rest",
            "end of the path": "to the end of the path", "farthest point": "to the farthest point of the motion"}[ending]
+    overlap = ("no overlap" if max(volumes) == 0 else
+               f"overlap at most {max(volumes):.3g} = {max(fractions):.2g} of the smaller block's volume")
     return (f"{names} move{'s' if len(moving) == 1 else ''} {displacements[-1]:.3g} (model size {size:.3g}) along the "
-            f"motion, {how}, with overlap at most {max(volumes):.3g} = {max(fractions):.2g} of the smaller block's "
-            f"volume (tolerance {rtol:g}) in {count} steps")
+            f"motion, {how}, with {overlap} (tolerance {rtol:g} of the smaller block's volume) in {count} steps")
