@@ -284,11 +284,15 @@ def beyond_first_order(assembly: Assembly, verdict: Verdict, *, contacts=None) -
     from interlock.verify.second_order import second_order
 
     first = verdict.status
-    second = second_order(assembly, frame=verdict.frame, contacts=contacts)
+    if verdict.translational:  # the gaps are linear in translations: nothing to learn at second order
+        second, tried = None, ["second order: not for translations only (the gaps are linear in them)"]
+    else:
+        second = second_order(assembly, frame=verdict.frame, contacts=contacts)
+        tried = [f"second order: {second}"]
     verdict = dataclasses.replace(verdict, order=2, second_order=second)
-    if second.blocked:
+    if second is not None and second.blocked:
         return dataclasses.replace(verdict, interlocked=True, status=f"{second.status}; first order: {first}")
-    tried, shown = [f"second order: {second}"], None
+    shown = None
     if verdict.motion is not None:
         candidates = [verdict.motion] + ([-verdict.motion] if verdict.motion_kind == "sliding" else [])
         for motion in candidates:

@@ -172,6 +172,11 @@ def test_block_on_pins_needs_its_valley_above_its_bottom():
         presets.block_on_pins(1.0, 0.5)
 
 
+def test_translational_verdicts_skip_second_order_and_still_show_the_motion():
+    v = check(presets.cube_grid(), translational=True, order=2)
+    assert v.second_order is None and v.finite_motion.shown and v.interlocked is False
+
+
 def test_check_refuses_other_orders():
     with pytest.raises(InterlockError, match="order must be 1"):
         check(presets.cube_grid(), order=3)
