@@ -42,7 +42,10 @@ decided globally:
    active set and the friction directions and an LP looks for a motion that
    realises them exactly, and SLSQP solves (11) locally from the MILP's point; then the
    sectors are refined (``4 -> 8 -> 16``).
-   If none of this gives a solution, the answer is "inconclusive".
+   If none of this gives a solution, or HiGHS does not decide within ``time_limit``, a last local solve
+   (SLSQP) starts from where the assembly settles: the motion closing the most vertices that, keeping
+   them closed, does the most work; if the exact LP accepts its motion the answer is "stable",
+   otherwise "inconclusive".
 
 Only the ratio ``eta / eps`` matters (the constraints are homogeneous in
 ``(dq, eps, eta)``); internally lengths of the motion are in units of ``eps``.
@@ -99,6 +102,9 @@ SNAP_TOL = 1e-2
 DEFAULT_TIME_LIMIT = 60.0
 #: Most closed vertices for the local (SLSQP) repair of a MILP point; beyond, only the LP repairs run.
 POLISH_LIMIT = 100
+#: Most closed vertices for the last-resort local solve after an undecided MILP (dense SLSQP: the 148 of the
+#: 38-block arch take 30-60 s).
+LAST_RESORT_LIMIT = 200
 POLISH_ITERATIONS = 50
 #: Motions of earlier stable loads that :func:`decider` tries first.
 WARM_STARTS = 3
@@ -355,6 +361,17 @@ class _Problem:
                 forces = exact
                 break
             message = f"the MILP's motions could not be made exact with up to {count} sectors"
+        if status == "inconclusive":  # last resort: a local solve of (11) from a motion that settles the assembly
+            started = time.perf_counter()
+            settled = self._settled_motion(b_eq)
+            polished = None if settled is None else self._polish(b_eq, rbe_forces.reshape(-1, 3), settled,
+                                                                  limit=LAST_RESORT_LIMIT)
+            exact = None if polished is None else self._exact(b_eq, polished)
+            timings["lp"] += time.perf_counter() - started
+            if exact is not None:
+                status, forces, motion = "stable", exact, polished
+                message = ("equilibrium realised by a virtual motion, found by a local solve from where the "
+                           f"assembly settles (the MILP did not decide: {message})")
         parameters = {**self.parameters, "sectors": tried, "gravity": gravity.tolist()}
         return self._result(status, message, forces * total if status == "stable" else None,
                             motion if status == "stable" else None, parameters, timings)
@@ -706,7 +723,22 @@ class _Problem:
                           b_eq=np.concatenate(b_eq), bounds=bounds, method="highs")
         return outcome.x[:n_q] if outcome.status == 0 else None
 
-    def _polish(self, b_eq, forces, motion):
+    def _settled_motion(self, b_eq):
+        """The allowed motion that closes as many vertices as an LP can (least ``sum dd_n``) and, keeping those
+        closed, does the most work: where an assembly settles under its load (the start of :meth:`_polish`
+        when the MILP does not decide).  ``None`` if an LP fails."""
+        a_ub, b_ub = self._allowed_motions
+        d_n = self.kinematic[0::3]
+        closing = linprog(np.asarray(d_n.sum(axis=0)).ravel(), A_ub=a_ub, b_ub=b_ub, bounds=(None, None),
+                          method="highs")
+        if closing.status != 0:
+            return None
+        closed = d_n @ closing.x + 1.0 <= ACTIVE_TOL
+        working = linprog(b_eq, A_ub=a_ub, b_ub=b_ub, A_eq=d_n[closed], b_eq=np.full(int(closed.sum()), -1.0),
+                          bounds=(None, None), method="highs")
+        return working.x if working.status == 0 else None
+
+    def _polish(self, b_eq, forces, motion, limit=POLISH_LIMIT):
         """Solve (11) locally from the MILP's point, with its closed vertices kept closed (SLSQP).
 
         Unknowns ``(dq, f_n, alpha)`` on the closed set ``S``; friction is
@@ -717,7 +749,7 @@ class _Problem:
         system, d = self.system, self.kinematic
         dd = (d @ motion).reshape(-1, 3)
         closed = np.flatnonzero((dd[:, 0] + 1.0 <= 1e-4) | (forces[:, 0] > 1e-9))
-        if not len(closed) or len(closed) > POLISH_LIMIT:
+        if not len(closed) or (limit is not None and len(closed) > limit):
             return None
         a = system.a_eq.toarray()
         kin = d.toarray()

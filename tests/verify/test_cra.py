@@ -59,6 +59,15 @@ def _certificate_holds(assembly, result, gravity, density=1.0):
 # --- small facts ---------------------------------------------------------------------------------------------
 
 
+def test_an_undecided_milp_ends_in_a_local_solve_from_where_the_arch_settles():
+    from interlock.blocks import semicircular_arch
+
+    arch = semicircular_arch(8)  # the MILP does not decide it within 60 s either
+    result = cra(arch, math.tan(math.radians(43)), time_limit=0.2)
+    assert result.status == "stable" and "local solve" in result.message and "did not decide" in result.message
+    _certificate_holds(arch, result, (0.0, 0.0, -1.0))
+
+
 @pytest.mark.parametrize("mu", [0.2, 0.5])
 def test_block_on_a_block_slides_at_atan_mu_as_with_rbe(mu):
     angle = critical_tilt(_stack(), "x", mu, method="cra")
