@@ -19,7 +19,7 @@ from interlock.blocks.escher import Block, DeformationError
 from interlock.errors import GalleryError
 from interlock.gallery.export import export
 from interlock.gallery.render import render
-from interlock.verify import check, criterion_4_3, periodic_check
+from interlock.verify import check, contacts, criterion_4_3, periodic_check
 from interlock.verify.check import beyond_first_order
 from interlock.verify.motion import export_motion
 
@@ -363,13 +363,14 @@ def _build_entry(entry: Entry, folder: Path, seed: int) -> EntryResult:
               "blocks": len(assembly), "frame": list(assembly.frame)}
 
     clock = time.perf_counter()
-    first = check(assembly, validate=False)
+    found = contacts(assembly)
+    first = check(assembly, validate=False, contacts=found)
     record["finite"] = first.to_dict()
     timings["finite_verdict"] = time.perf_counter() - clock
     beyond = record["beyond"] = None  # a first-order motion taken to second order and tried as a finite one
     if first.interlocked is not True:
         clock = time.perf_counter()
-        beyond = beyond_first_order(assembly, first)
+        beyond = beyond_first_order(assembly, first, contacts=found)
         record["beyond"] = beyond.to_dict()
         timings["beyond_first_order"] = time.perf_counter() - clock
     record["periodic"] = record["periodic_translational"] = record["criterion_4_3"] = None
