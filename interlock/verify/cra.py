@@ -106,6 +106,8 @@ POLISH_LIMIT = 100
 #: 38-block arch take 30-60 s).
 LAST_RESORT_LIMIT = 200
 POLISH_ITERATIONS = 50
+#: Weight of ``sum f_n`` beside the friction in the least-friction equilibrium (forces in units of the weight).
+LEAST_FRICTION_NORMAL = 1e-3
 #: Motions of earlier stable loads that :func:`decider` tries first.
 WARM_STARTS = 3
 
@@ -378,25 +380,25 @@ class _Problem:
 
     def _quick(self, b_eq, rbe_forces, known=(), most_work=None):
         """Decide quickly where possible: no RBE equilibrium (``rbe_forces`` None) means "unstable" (CRA only
-        removes solutions); a known motion (``known``, e.g. of a nearby load), the allowed motion on which the
-        load does the most work (``most_work``: a block pushed into its seat), or one realising RBE's
-        least-force equilibrium exactly, that carries the load means "stable".  ``None`` otherwise."""
+        removes solutions); a motion that realises an equilibrium exactly means "stable".  Tried in turn: a
+        known motion (``known``, e.g. of a nearby load), the allowed motion on which the load does the most work
+        (``most_work``: a block pushed into its seat), one realising the least-friction equilibrium
+        (:meth:`_least_friction`) and one realising RBE's least-force equilibrium.  ``None`` otherwise."""
         if rbe_forces is None:
             return "unstable", None, None, "RBE has no equilibrium, so no motion can realise one"
-        for motion in known:
-            exact = self._exact(b_eq, motion)
-            if exact is not None:
-                return "stable", exact, motion, "equilibrium realised by the motion of a nearby load"
-        exact = None if most_work is None else self._exact(b_eq, most_work)
-        if exact is not None:
-            return "stable", exact, most_work, "equilibrium realised by the motion of most work"
         forces = rbe_forces.reshape(-1, 3)
-        candidates = [lambda: self._realise(forces)] + [lambda m=m: self._polish(b_eq, forces, m) for m in known]
-        for candidate in candidates:
+        candidates = [(lambda m=m: m, "the motion of a nearby load") for m in known]
+        candidates += [(lambda: most_work, "the motion of most work"),
+                       (lambda: self._realise_least_friction(b_eq), "a motion realising the least-friction "
+                                                                      "equilibrium"),
+                       (lambda: self._realise(forces), "a motion realising RBE's least-force equilibrium")]
+        candidates += [(lambda m=m: self._polish(b_eq, forces, m), "a local solve from the motion of a nearby load")
+                       for m in known]
+        for candidate, how in candidates:
             motion = candidate()
             exact = None if motion is None else self._exact(b_eq, motion)
             if exact is not None:
-                return "stable", exact, motion, "equilibrium realised by a virtual motion (local repair)"
+                return "stable", exact, motion, f"equilibrium realised by {how}"
         return None
 
     def internal_motion(self, world: np.ndarray) -> np.ndarray:
@@ -691,6 +693,39 @@ class _Problem:
         alpha = outcome.x[n_closed:]
         forces[sliding, 1:] = -alpha[:, None] * slide[sliding]
         return forces
+
+    def _least_friction(self, b_eq):
+        """The RBE equilibrium with the least friction, or ``None``: minimise ``sum_v |f_u| + |f_v|`` (in each
+        contact's ``(u, v)`` basis) plus ``LEAST_FRICTION_NORMAL`` times ``sum f_n``.
+
+        CRA allows friction only where a vertex slides, against the slide
+        (Eq. (9)); an equilibrium that needs friction at few vertices leaves
+        the others free to slide any way, so a motion realising it
+        (:meth:`_realise`) is easy to find.  The 36-voussoir arch: 68 of 148
+        vertices carry friction, and a motion realises it exactly (RBE's
+        least-force equilibrium is not realisable).
+        """
+        system = self.system
+        s = len(system.points)
+        if s == 0:
+            return None
+        # x = (f, t) with |f_u| <= t_u, |f_v| <= t_v
+        tangential = sp.csr_matrix((np.ones(2 * s), (np.arange(2 * s), (3 * np.arange(s)[:, None] + [1, 2]).ravel())),
+                                   shape=(2 * s, 3 * s))
+        identity = sp.eye(2 * s, format="csr")
+        a_ub = sp.vstack([sp.hstack([system.a_ub, sp.csr_matrix((system.a_ub.shape[0], 2 * s))]),
+                          sp.hstack([tangential, -identity]), sp.hstack([-tangential, -identity])], format="csr")
+        a_eq = sp.hstack([system.a_eq, sp.csr_matrix((system.a_eq.shape[0], 2 * s))], format="csr")
+        cost = np.concatenate([np.tile([LEAST_FRICTION_NORMAL, 0.0, 0.0], s), np.ones(2 * s)])
+        bounds = np.vstack([system.bounds, np.tile([0.0, np.inf], (2 * s, 1))])
+        outcome = linprog(cost, A_ub=a_ub, b_ub=np.zeros(a_ub.shape[0]), A_eq=a_eq, b_eq=b_eq, bounds=bounds,
+                          method="highs")
+        return outcome.x[:3 * s].reshape(-1, 3) if outcome.status == 0 else None
+
+    def _realise_least_friction(self, b_eq):
+        """A motion realising the least-friction equilibrium (:meth:`_least_friction`), or ``None``."""
+        forces = self._least_friction(b_eq)
+        return None if forces is None else self._realise(forces)
 
     def _realise(self, forces):
         """A motion realising the MILP's forces exactly (LP in ``dq`` and ``beta``), or ``None``.
