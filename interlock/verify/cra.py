@@ -64,6 +64,7 @@ import shapely
 from scipy.linalg import null_space
 from scipy.optimize import Bounds, LinearConstraint, linprog, milp, minimize
 
+from interlock.verify import cra_ipopt
 from interlock.verify.stability import (DEFAULT_SIDES, StabilityError, _gravity, _json_float, _positive,
                                         _System)
 
@@ -363,17 +364,16 @@ class _Problem:
                 forces = exact
                 break
             message = f"the MILP's motions could not be made exact with up to {count} sectors"
-        if status == "inconclusive":  # last resort: a local solve of (11) from a motion that settles the assembly
+        if status == "inconclusive":  # last resort: local solves of (11), checked by the exact LP
             started = time.perf_counter()
-            settled = self._settled_motion(b_eq)
-            polished = None if settled is None else self._polish(b_eq, rbe_forces.reshape(-1, 3), settled,
-                                                                  limit=LAST_RESORT_LIMIT)
-            exact = None if polished is None else self._exact(b_eq, polished)
-            timings["lp"] += time.perf_counter() - started
-            if exact is not None:
-                status, forces, motion = "stable", exact, polished
-                message = ("equilibrium realised by a virtual motion, found by a local solve from where the "
-                           f"assembly settles (the MILP did not decide: {message})")
+            found, how = self._last_resort(b_eq, rbe_forces.reshape(-1, 3), most_work, timings)
+            timings["lp"] += time.perf_counter() - started - timings.get("ipopt", 0.0)
+            if found is not None:
+                status, (motion, forces) = "stable", found
+                message = (f"equilibrium realised by a virtual motion, found by {how} (the MILP did not decide: "
+                           f"{message})")
+            else:
+                message += f"; {how}"
         parameters = {**self.parameters, "sectors": tried, "gravity": gravity.tolist()}
         return self._result(status, message, forces * total if status == "stable" else None,
                             motion if status == "stable" else None, parameters, timings)
@@ -399,6 +399,56 @@ class _Problem:
             exact = None if motion is None else self._exact(b_eq, motion)
             if exact is not None:
                 return "stable", exact, motion, f"equilibrium realised by {how}"
+        return None
+
+    def _last_resort(self, b_eq, rbe_forces, most_work, timings):
+        """``((motion, forces), how)`` of a local solve of (11) that the exact LP accepts, or ``(None, why not)``.
+
+        If CasADi is installed, IPOPT on the whole problem (11) as in the paper
+        (:mod:`interlock.verify.cra_ipopt`) from the motion of most work with the least-friction forces, from
+        rest, and from where the assembly settles (:meth:`_settled_motion`); then SLSQP from where it settles
+        with those vertices kept closed (up to :data:`LAST_RESORT_LIMIT` of them).
+        """
+        settled = self._settled_motion(b_eq)
+        statuses = []
+        if cra_ipopt.available():
+            least_friction = self._least_friction(b_eq)
+            starts = [(most_work, least_friction), (None, None), (settled, least_friction)]
+            started = time.perf_counter()
+            try:
+                for motion, forces, status in cra_ipopt.local_solutions(self.system.a_eq, self.system.a_ub, b_eq,
+                                                                        self.ratio, starts):
+                    statuses.append(status)
+                    found = self._verify_local(b_eq, motion, forces)
+                    if found is not None:
+                        return found, f"IPOPT on problem (11) (start {len(statuses)} of {len(starts)})"
+            finally:
+                timings["ipopt"] = time.perf_counter() - started
+        polished = None if settled is None else self._polish(b_eq, rbe_forces, settled, limit=LAST_RESORT_LIMIT)
+        exact = None if polished is None else self._exact(b_eq, polished)
+        if exact is not None:
+            return (polished, exact), "a local solve (SLSQP) from where the assembly settles"
+        if not statuses:
+            return None, f"no local solve found one (SLSQP; {cra_ipopt.MISSING_MESSAGE} for the paper's solver)"
+        return None, (f"no local solve found one (SLSQP, and IPOPT, the paper's solver, from {len(statuses)} starts: "
+                      f"{', '.join(statuses)}; which proves nothing)")
+
+    def _verify_local(self, b_eq, motion, forces):
+        """``(motion, forces)`` solving (11) exactly near a local solver's point, or ``None``.
+
+        An interior-point solution closes its contacts only nearly: tried are its motion, the motion
+        snapped shut (:meth:`_snap`), one realising its forces (:meth:`_realise`) and SLSQP from it
+        (:meth:`_polish`) with its nearly closed vertices loaded.
+        """
+        dd = (self.kinematic @ motion).reshape(-1, 3)
+        near_forces = np.where((dd[:, 0] + 1.0 <= SNAP_TOL)[:, None], forces, 0.0)
+        snapped = self._snap(motion)
+        for candidate in (lambda: motion, lambda: snapped, lambda: self._realise(forces),
+                          lambda: self._polish(b_eq, near_forces, motion if snapped is None else snapped)):
+            tried = candidate()
+            exact = None if tried is None else self._exact(b_eq, tried)
+            if exact is not None:
+                return tried, exact
         return None
 
     def internal_motion(self, world: np.ndarray) -> np.ndarray:
@@ -432,22 +482,12 @@ class _Problem:
         motion = self.internal_motion(world)
         b_eq, total = self._right_hand_side(gravity)
         started = time.perf_counter()
-        exact = None
-        # an interior-point solution closes its contacts only nearly: snap them shut, or realise its forces
-        dd = (self.kinematic @ motion).reshape(-1, 3)
-        near_forces = np.where((dd[:, 0] + 1.0 <= SNAP_TOL)[:, None], upstream_forces, 0.0)
-        snapped = self._snap(motion)
-        for candidate in (lambda: motion, lambda: snapped, lambda: self._realise(upstream_forces),
-                          lambda: self._polish(b_eq, near_forces, motion if snapped is None else snapped)):
-            tried = candidate()
-            exact = None if tried is None else self._exact(b_eq, tried)
-            if exact is not None:
-                motion = tried
-                break
+        found = self._verify_local(b_eq, motion, upstream_forces)
         timings["lp"] = time.perf_counter() - started
-        if exact is None:
+        if found is None:
             return self._result("inconclusive", "compas_cra's motion does not realise an equilibrium exactly",
                                 None, None, parameters, timings)
+        motion, exact = found
         return self._result("stable", "equilibrium realised by compas_cra's motion (verified exactly)",
                             exact * total, motion, parameters, timings)
 
@@ -688,9 +728,10 @@ class _Problem:
                           A_eq=a_eq, b_eq=b_eq, bounds=(0, None), method="highs")
         if outcome.status != 0:
             return None
+        x = np.maximum(outcome.x, 0.0)  # HiGHS may return -1e-11 for a bound of 0
         forces = np.zeros((len(dd), 3))
-        forces[closed, 0] = outcome.x[:n_closed]
-        alpha = outcome.x[n_closed:]
+        forces[closed, 0] = x[:n_closed]
+        alpha = x[n_closed:]
         forces[sliding, 1:] = -alpha[:, None] * slide[sliding]
         return forces
 
