@@ -19,7 +19,9 @@ decided globally:
    "stable"; tried are the motion of a nearby load (:func:`decider`), the
    allowed motion on which the load does the most work (an LP: a block
    pushed into its seat; it settles 198 of the 235 stable wedge cases of
-   Table 2's scans), and one realising RBE's least-force equilibrium.
+   Table 2's scans), one realising the equilibrium with the least friction
+   (friction needs a slide, so the fewer vertices carry it the freer the
+   motion: the 36-voussoir arch) and one realising RBE's least-force equilibrium.
 1. **MILP relaxation.**  A binary per vertex switches Eq. (10); binaries over
    ``sectors`` angular sectors of the contact plane put the slide ``dd_t``
    and the reversed friction ``-f_t`` in the same sector, with a slide of at
@@ -42,10 +44,12 @@ decided globally:
    active set and the friction directions and an LP looks for a motion that
    realises them exactly, and SLSQP solves (11) locally from the MILP's point; then the
    sectors are refined (``4 -> 8 -> 16``).
-   If none of this gives a solution, or HiGHS does not decide within ``time_limit``, a last local solve
-   (SLSQP) starts from where the assembly settles: the motion closing the most vertices that, keeping
-   them closed, does the most work; if the exact LP accepts its motion the answer is "stable",
-   otherwise "inconclusive".
+   If none of this gives a solution, or HiGHS does not decide within ``time_limit``, local solvers
+   have the last word: IPOPT on the whole of (11), as in the paper, if CasADi is installed
+   (:mod:`interlock.verify.cra_ipopt`), then SLSQP from where the assembly settles (the motion
+   closing the most vertices that, keeping them closed, does the most work).  If the exact LP
+   accepts a motion they find, the answer is "stable", otherwise "inconclusive" (a local solver's
+   "infeasible" proves nothing).
 
 Only the ratio ``eta / eps`` matters (the constraints are homogeneous in
 ``(dq, eps, eta)``); internally lengths of the motion are in units of ``eps``.
