@@ -65,10 +65,10 @@ from functools import cached_property
 import numpy as np
 import scipy.sparse as sp
 import shapely
-from scipy.linalg import null_space
-from scipy.optimize import Bounds, LinearConstraint, linprog, milp, minimize
+from scipy.optimize import Bounds, LinearConstraint, linprog, milp
 
-from interlock.verify import cra_ipopt
+from interlock.verify import cra_local
+from interlock.verify.cra_local import ACTIVE_TOL
 from interlock.verify.stability import (DEFAULT_SIDES, StabilityError, _gravity, _json_float, _positive,
                                         _System)
 
@@ -91,8 +91,7 @@ REFINED_SECTORS = (8, 16)
 DEFAULT_FORCE_BOUND = 1e3
 #: Smallest virtual slide (along the sector bisector) of a vertex carrying friction, as a fraction of ``eps``.
 DEFAULT_MIN_SLIDE = 1e-3
-#: A vertex is closed when ``dd_n + eps <= ACTIVE_TOL * eps``; it slides when ``|dd_t| > SLIDE_TOL * eps``.
-ACTIVE_TOL = 1e-7
+#: A vertex slides when ``|dd_t| > SLIDE_TOL * eps`` (it is closed when ``dd_n + eps <= ACTIVE_TOL * eps``).
 SLIDE_TOL = 1e-7
 #: Slack added to every bound the MILP derives by an LP (big Ms, the virtual-work bound and row), relative and
 #: absolute (forces in units of the weight, motions of eps): a solution of (11) often attains them exactly (a
@@ -101,18 +100,8 @@ SLIDE_TOL = 1e-7
 BOUND_MARGIN = 1e-3
 #: Factor on the big Ms of the second, looser MILP that confirms an infeasibility (see ``_Problem._milp``).
 LOOSE = 10.0
-#: Vertices within ``SNAP_TOL * eps`` of closed in a local solver's motion are snapped shut before checking.
-SNAP_TOL = 1e-2
 #: Seconds HiGHS may spend on one MILP before the answer is "inconclusive".
 DEFAULT_TIME_LIMIT = 60.0
-#: Most closed vertices for the local (SLSQP) repair of a MILP point; beyond, only the LP repairs run.
-POLISH_LIMIT = 100
-#: Most closed vertices for the last-resort local solve after an undecided MILP (dense SLSQP: the 148 of the
-#: 38-block arch take 30-60 s).
-LAST_RESORT_LIMIT = 200
-POLISH_ITERATIONS = 50
-#: Weight of ``sum f_n`` beside the friction in the least-friction equilibrium (forces in units of the weight).
-LEAST_FRICTION_NORMAL = 1e-3
 #: Motions of earlier stable loads that :func:`decider` tries first.
 WARM_STARTS = 3
 
@@ -152,7 +141,8 @@ class CRAResult:
         ``mu``, ``cone``, ``sides``, ``eps`` and ``eta`` (relative and absolute), ``sectors`` tried,
         ``force_bound``, ``min_slide``, ``density``, ``gravity``, ``frame``.
     timings : dict
-        Seconds for ``contacts``, ``build``, ``milp`` (all MILPs) and ``lp`` (all exact checks).
+        Seconds for ``contacts``, ``build``, ``milp`` (all MILPs), ``lp`` (all exact checks and SLSQP) and,
+        when it ran, ``ipopt``.
     """
 
     status: str
@@ -355,12 +345,12 @@ class _Problem:
                 break
             forces, motion = outcome
             started = time.perf_counter()
-            exact = self._exact(b_eq, motion)
-            for repair in (self._realise, lambda f: self._polish(b_eq, f, motion)):
+            exact = self.exact(b_eq, motion)
+            for repair in (lambda f: cra_local.realise(self, f), lambda f: cra_local.polish(self, b_eq, f, motion)):
                 if exact is not None:
                     break
                 repaired = repair(forces)
-                exact = None if repaired is None else self._exact(b_eq, repaired)
+                exact = None if repaired is None else self.exact(b_eq, repaired)
                 motion = motion if repaired is None else repaired
             timings["lp"] += time.perf_counter() - started
             if exact is not None:
@@ -370,7 +360,7 @@ class _Problem:
             message = f"the MILP's motions could not be made exact with up to {count} sectors"
         if status == "inconclusive":  # last resort: local solves of (11), checked by the exact LP
             started = time.perf_counter()
-            found, how = self._last_resort(b_eq, rbe_forces.reshape(-1, 3), most_work, timings)
+            found, how = cra_local.last_resort(self, b_eq, rbe_forces.reshape(-1, 3), most_work, timings)
             timings["lp"] += time.perf_counter() - started - timings.get("ipopt", 0.0)
             if found is not None:
                 status, (motion, forces) = "stable", found
@@ -387,72 +377,23 @@ class _Problem:
         removes solutions); a motion that realises an equilibrium exactly means "stable".  Tried in turn: a
         known motion (``known``, e.g. of a nearby load), the allowed motion on which the load does the most work
         (``most_work``: a block pushed into its seat), one realising the least-friction equilibrium
-        (:meth:`_least_friction`) and one realising RBE's least-force equilibrium.  ``None`` otherwise."""
+        (:func:`~interlock.verify.cra_local.least_friction`) and one realising RBE's least-force equilibrium.
+        ``None`` otherwise."""
         if rbe_forces is None:
             return "unstable", None, None, "RBE has no equilibrium, so no motion can realise one"
         forces = rbe_forces.reshape(-1, 3)
         candidates = [(lambda m=m: m, "the motion of a nearby load") for m in known]
         candidates += [(lambda: most_work, "the motion of most work"),
-                       (lambda: self._realise_least_friction(b_eq), "a motion realising the least-friction "
-                                                                      "equilibrium"),
-                       (lambda: self._realise(forces), "a motion realising RBE's least-force equilibrium")]
-        candidates += [(lambda m=m: self._polish(b_eq, forces, m), "a local solve from the motion of a nearby load")
-                       for m in known]
+                       (lambda: cra_local.realise_least_friction(self, b_eq),
+                        "a motion realising the least-friction equilibrium"),
+                       (lambda: cra_local.realise(self, forces), "a motion realising RBE's least-force equilibrium")]
+        candidates += [(lambda m=m: cra_local.polish(self, b_eq, forces, m),
+                        "a local solve from the motion of a nearby load") for m in known]
         for candidate, how in candidates:
             motion = candidate()
-            exact = None if motion is None else self._exact(b_eq, motion)
+            exact = None if motion is None else self.exact(b_eq, motion)
             if exact is not None:
                 return "stable", exact, motion, f"equilibrium realised by {how}"
-        return None
-
-    def _last_resort(self, b_eq, rbe_forces, most_work, timings):
-        """``((motion, forces), how)`` of a local solve of (11) that the exact LP accepts, or ``(None, why not)``.
-
-        If CasADi is installed, IPOPT on the whole problem (11) as in the paper
-        (:mod:`interlock.verify.cra_ipopt`) from the motion of most work with the least-friction forces, from
-        rest, and from where the assembly settles (:meth:`_settled_motion`); then SLSQP from where it settles
-        with those vertices kept closed (up to :data:`LAST_RESORT_LIMIT` of them).
-        """
-        settled = self._settled_motion(b_eq)
-        statuses = []
-        if cra_ipopt.available():
-            least_friction = self._least_friction(b_eq)
-            starts = [(most_work, least_friction), (None, None), (settled, least_friction)]
-            started = time.perf_counter()
-            try:
-                for motion, forces, status in cra_ipopt.local_solutions(self.system.a_eq, self.system.a_ub, b_eq,
-                                                                        self.ratio, starts):
-                    statuses.append(status)
-                    found = self._verify_local(b_eq, motion, forces)
-                    if found is not None:
-                        return found, f"IPOPT on problem (11) (start {len(statuses)} of {len(starts)})"
-            finally:
-                timings["ipopt"] = time.perf_counter() - started
-        polished = None if settled is None else self._polish(b_eq, rbe_forces, settled, limit=LAST_RESORT_LIMIT)
-        exact = None if polished is None else self._exact(b_eq, polished)
-        if exact is not None:
-            return (polished, exact), "a local solve (SLSQP) from where the assembly settles"
-        if not statuses:
-            return None, f"no local solve found one (SLSQP; {cra_ipopt.MISSING_MESSAGE} for the paper's solver)"
-        return None, (f"no local solve found one (SLSQP, and IPOPT, the paper's solver, from {len(statuses)} starts: "
-                      f"{', '.join(statuses)}; which proves nothing)")
-
-    def _verify_local(self, b_eq, motion, forces):
-        """``(motion, forces)`` solving (11) exactly near a local solver's point, or ``None``.
-
-        An interior-point solution closes its contacts only nearly: tried are its motion, the motion
-        snapped shut (:meth:`_snap`), one realising its forces (:meth:`_realise`) and SLSQP from it
-        (:meth:`_polish`) with its nearly closed vertices loaded.
-        """
-        dd = (self.kinematic @ motion).reshape(-1, 3)
-        near_forces = np.where((dd[:, 0] + 1.0 <= SNAP_TOL)[:, None], forces, 0.0)
-        snapped = self._snap(motion)
-        for candidate in (lambda: motion, lambda: snapped, lambda: self._realise(forces),
-                          lambda: self._polish(b_eq, near_forces, motion if snapped is None else snapped)):
-            tried = candidate()
-            exact = None if tried is None else self._exact(b_eq, tried)
-            if exact is not None:
-                return tried, exact
         return None
 
     def internal_motion(self, world: np.ndarray) -> np.ndarray:
@@ -486,7 +427,7 @@ class _Problem:
         motion = self.internal_motion(world)
         b_eq, total = self._right_hand_side(gravity)
         started = time.perf_counter()
-        found = self._verify_local(b_eq, motion, upstream_forces)
+        found = cra_local.verify_local(self, b_eq, motion, upstream_forces)
         timings["lp"] = time.perf_counter() - started
         if found is None:
             return self._result("inconclusive", "compas_cra's motion does not realise an equilibrium exactly",
@@ -495,31 +436,10 @@ class _Problem:
         return self._result("stable", "equilibrium realised by compas_cra's motion (verified exactly)",
                             exact * total, motion, parameters, timings)
 
-    def _snap(self, motion, tolerance: float = SNAP_TOL):
-        """The motion nearest (L1) to ``motion`` that closes exactly the vertices it nearly closes
-        (``dd_n + eps <= tolerance * eps``) and keeps the others open; ``None`` if there is none."""
-        d = self.kinematic
-        dd = (d @ motion).reshape(-1, 3)
-        near = dd[:, 0] + 1.0 <= tolerance
-        if not near.any():
-            return None
-        n_q = d.shape[1]
-        identity = sp.eye(n_q, format="csr")
-        # unknowns (q, r) with |q - motion| <= r, minimise sum r
-        a_ub = sp.vstack([sp.hstack([identity, -identity]), sp.hstack([-identity, -identity]),
-                          sp.hstack([d, sp.csr_matrix((d.shape[0], n_q))]),
-                          sp.hstack([-d, sp.csr_matrix((d.shape[0], n_q))])], format="csr")
-        s = len(dd)
-        b_ub = np.concatenate([motion, -motion, np.full(3 * s, self.ratio), np.tile([1.0, self.ratio, self.ratio], s)])
-        a_eq = sp.hstack([d[0::3][near], sp.csr_matrix((int(near.sum()), n_q))], format="csr")
-        outcome = linprog(np.concatenate([np.zeros(n_q), np.ones(n_q)]), A_ub=a_ub, b_ub=b_ub, A_eq=a_eq,
-                          b_eq=np.full(int(near.sum()), -1.0), bounds=(None, None), method="highs")
-        return outcome.x[:n_q] if outcome.status == 0 else None
-
     # --- MILP relaxation --------------------------------------------------------------------------------------
 
     @cached_property
-    def _allowed_motions(self) -> tuple[sp.csr_matrix, np.ndarray]:
+    def allowed_motions(self) -> tuple[sp.csr_matrix, np.ndarray]:
         """``(A, b)`` with ``A q <= b`` exactly when ``dd_n >= -eps`` and ``|dd| <= eta`` (eps = 1)."""
         d = self.kinematic
         s = d.shape[0] // 3
@@ -535,7 +455,7 @@ class _Problem:
         """
         d = self.kinematic
         s = d.shape[0] // 3
-        a_ub, b_ub = self._allowed_motions
+        a_ub, b_ub = self.allowed_motions
         normal = np.full(s, self.ratio)
         for v in range(s):
             outcome = linprog(-d[3 * v].toarray().ravel(), A_ub=a_ub, b_ub=b_ub, bounds=(None, None), method="highs")
@@ -576,7 +496,7 @@ class _Problem:
         and the motion itself often realises an equilibrium (a block pushed
         into its seat closes every contact), which :meth:`_quick` tries.
         """
-        a_ub, b_ub = self._allowed_motions
+        a_ub, b_ub = self.allowed_motions
         outcome = linprog(b_eq, A_ub=a_ub, b_ub=b_ub, bounds=(None, None), method="highs")
         if outcome.status != 0:
             return np.inf, None
@@ -701,7 +621,7 @@ class _Problem:
 
     # --- exact checks -----------------------------------------------------------------------------------------
 
-    def _exact(self, b_eq, motion):
+    def exact(self, b_eq, motion):
         """Forces solving (11) for this motion (least ``sum f_n``), or ``None``: an LP in ``(f_n, alpha)``."""
         system = self.system
         dd = (self.kinematic @ motion).reshape(-1, 3)
@@ -738,161 +658,6 @@ class _Problem:
         alpha = x[n_closed:]
         forces[sliding, 1:] = -alpha[:, None] * slide[sliding]
         return forces
-
-    def _least_friction(self, b_eq):
-        """The RBE equilibrium with the least friction, or ``None``: minimise ``sum_v |f_u| + |f_v|`` (in each
-        contact's ``(u, v)`` basis) plus ``LEAST_FRICTION_NORMAL`` times ``sum f_n``.
-
-        CRA allows friction only where a vertex slides, against the slide
-        (Eq. (9)); an equilibrium that needs friction at few vertices leaves
-        the others free to slide any way, so a motion realising it
-        (:meth:`_realise`) is easy to find.  The 36-voussoir arch: 68 of 148
-        vertices carry friction, and a motion realises it exactly (RBE's
-        least-force equilibrium is not realisable).
-        """
-        system = self.system
-        s = len(system.points)
-        if s == 0:
-            return None
-        # x = (f, t) with |f_u| <= t_u, |f_v| <= t_v
-        tangential = sp.csr_matrix((np.ones(2 * s), (np.arange(2 * s), (3 * np.arange(s)[:, None] + [1, 2]).ravel())),
-                                   shape=(2 * s, 3 * s))
-        identity = sp.eye(2 * s, format="csr")
-        a_ub = sp.vstack([sp.hstack([system.a_ub, sp.csr_matrix((system.a_ub.shape[0], 2 * s))]),
-                          sp.hstack([tangential, -identity]), sp.hstack([-tangential, -identity])], format="csr")
-        a_eq = sp.hstack([system.a_eq, sp.csr_matrix((system.a_eq.shape[0], 2 * s))], format="csr")
-        cost = np.concatenate([np.tile([LEAST_FRICTION_NORMAL, 0.0, 0.0], s), np.ones(2 * s)])
-        bounds = np.vstack([system.bounds, np.tile([0.0, np.inf], (2 * s, 1))])
-        outcome = linprog(cost, A_ub=a_ub, b_ub=np.zeros(a_ub.shape[0]), A_eq=a_eq, b_eq=b_eq, bounds=bounds,
-                          method="highs")
-        return outcome.x[:3 * s].reshape(-1, 3) if outcome.status == 0 else None
-
-    def _realise_least_friction(self, b_eq):
-        """A motion realising the least-friction equilibrium (:meth:`_least_friction`), or ``None``."""
-        forces = self._least_friction(b_eq)
-        return None if forces is None else self._realise(forces)
-
-    def _realise(self, forces):
-        """A motion realising the MILP's forces exactly (LP in ``dq`` and ``beta``), or ``None``.
-
-        Loaded vertices close (``dd_n = -1``), the others may not overlap more;
-        friction vertices slide along ``-f_t``: ``dd_t = -beta f_t`` with
-        ``beta |f_t| >= min_slide``; vertices without friction may slide freely (``alpha = 0``).
-        """
-        d = self.kinematic
-        scale = max(float(np.abs(forces).max(initial=0.0)), 1e-300)
-        loaded = forces[:, 0] > 1e-9 * scale
-        friction = np.hypot(forces[:, 1], forces[:, 2])
-        rubbing = loaded & (friction > 1e-9 * scale)
-        s, n_q = len(forces), d.shape[1]
-        n_b = int(rubbing.sum())
-        d_n, d_t = d[0::3], (d[1::3], d[2::3])
-        blocks_eq = [sp.hstack([d_n[loaded], sp.csr_matrix((int(loaded.sum()), n_b))])]
-        b_eq = [np.full(int(loaded.sum()), -1.0)]
-        which = np.flatnonzero(rubbing)
-        for component in (0, 1):
-            scaled = sp.csr_matrix((forces[which, 1 + component], (np.arange(n_b), np.arange(n_b))), shape=(n_b, n_b))
-            blocks_eq.append(sp.hstack([d_t[component][which], scaled]))  # dd_t + beta f_t = 0
-            b_eq.append(np.zeros(n_b))
-        a_ub = sp.vstack([sp.hstack([-d, sp.csr_matrix((3 * s, n_b))]),
-                          sp.hstack([d, sp.csr_matrix((3 * s, n_b))])], format="csr")
-        b_ub = np.concatenate([np.tile([1.0, self.ratio, self.ratio], s), np.full(3 * s, self.ratio)])
-        low_beta = self.min_slide / friction[which]
-        bounds = [(None, None)] * n_q + [(lb, None) for lb in low_beta]
-        outcome = linprog(np.zeros(n_q + n_b), A_ub=a_ub, b_ub=b_ub, A_eq=sp.vstack(blocks_eq, format="csr"),
-                          b_eq=np.concatenate(b_eq), bounds=bounds, method="highs")
-        return outcome.x[:n_q] if outcome.status == 0 else None
-
-    def _settled_motion(self, b_eq):
-        """The allowed motion that closes as many vertices as an LP can (least ``sum dd_n``) and, keeping those
-        closed, does the most work: where an assembly settles under its load (the start of :meth:`_polish`
-        when the MILP does not decide).  ``None`` if an LP fails."""
-        a_ub, b_ub = self._allowed_motions
-        d_n = self.kinematic[0::3]
-        closing = linprog(np.asarray(d_n.sum(axis=0)).ravel(), A_ub=a_ub, b_ub=b_ub, bounds=(None, None),
-                          method="highs")
-        if closing.status != 0:
-            return None
-        closed = d_n @ closing.x + 1.0 <= ACTIVE_TOL
-        working = linprog(b_eq, A_ub=a_ub, b_ub=b_ub, A_eq=d_n[closed], b_eq=np.full(int(closed.sum()), -1.0),
-                          bounds=(None, None), method="highs")
-        return working.x if working.status == 0 else None
-
-    def _polish(self, b_eq, forces, motion, limit=POLISH_LIMIT):
-        """Solve (11) locally from the MILP's point, with its closed vertices kept closed (SLSQP).
-
-        Unknowns ``(dq, f_n, alpha)`` on the closed set ``S``; friction is
-        ``f_t = -alpha dd_t`` exactly, so equilibrium is bilinear:
-        ``A_n f_n - sum_v alpha_v A_t,v T_v dq = b``.  The objective is the
-        paper's ``|f_n|^2 + |alpha|^2`` (7a)/(11).  Returns the motion, or ``None``.
-        """
-        system, d = self.system, self.kinematic
-        dd = (d @ motion).reshape(-1, 3)
-        closed = np.flatnonzero((dd[:, 0] + 1.0 <= 1e-4) | (forces[:, 0] > 1e-9))
-        if not len(closed) or (limit is not None and len(closed) > limit):
-            return None
-        a = system.a_eq.toarray()
-        kin = d.toarray()
-        n_q, m = kin.shape[1], len(closed)
-        normal = a[:, 3 * closed]
-        tangential = [a[:, [3 * v + 1, 3 * v + 2]] @ kin[[3 * v + 1, 3 * v + 2]] for v in closed]  # M_v
-        sides, bound = len(system.cone_rows), -system.cone_rows[0, 0]
-        slide_rows = [system.cone_rows[:, 1:] @ kin[[3 * v + 1, 3 * v + 2]] for v in closed]  # (sides, n_q): c_k . T_v
-        others = np.setdiff1d(np.arange(len(dd)), closed)
-
-        # dq = q0 + N y keeps the closed vertices closed (the rows are often dependent, which SLSQP cannot take)
-        closed_rows = kin[3 * closed]
-        q0 = motion + np.linalg.lstsq(closed_rows, -1.0 - closed_rows @ motion, rcond=None)[0]
-        basis = null_space(closed_rows)
-        n_y = basis.shape[1]
-        tangential_y = [mv @ basis for mv in tangential]
-        slide_y = [rows @ basis for rows in slide_rows]
-
-        def split(x):
-            return q0 + basis @ x[:n_y], x[n_y:n_y + m], x[n_y + m:]
-
-        def equilibrium(x):
-            q, fn, alpha = split(x)
-            return normal @ fn - sum(al * (mv @ q) for al, mv in zip(alpha, tangential)) - b_eq
-
-        def equilibrium_jacobian(x):
-            q, fn, alpha = split(x)
-            return np.hstack([-sum(al * my for al, my in zip(alpha, tangential_y)), normal,
-                              np.column_stack([-(mv @ q) for mv in tangential])])
-
-        def cone(x):  # bound f_n + alpha (c_k . T_v dq) >= 0
-            q, fn, alpha = split(x)
-            return np.concatenate([bound * fn[i] + alpha[i] * (slide_rows[i] @ q) for i in range(m)])
-
-        def cone_jacobian(x):
-            q, fn, alpha = split(x)
-            rows = np.zeros((m * sides, n_y + 2 * m))
-            for i in range(m):
-                block = slice(i * sides, (i + 1) * sides)
-                rows[block, :n_y] = alpha[i] * slide_y[i]
-                rows[block, n_y + i] = bound
-                rows[block, n_y + m + i] = slide_rows[i] @ q
-            return rows
-
-        motion_rows = np.vstack([kin[3 * others], kin, -kin])
-        motion_bounds = np.concatenate([np.full(len(others), -1.0), np.full(2 * len(kin), -self.ratio)])
-        motion_y = motion_rows @ basis
-        constraints = [
-            {"type": "eq", "fun": equilibrium, "jac": equilibrium_jacobian},
-            {"type": "ineq", "fun": cone, "jac": cone_jacobian},
-            {"type": "ineq", "fun": lambda x: motion_rows @ split(x)[0] - motion_bounds,
-             "jac": lambda x: np.hstack([motion_y, np.zeros((len(motion_rows), 2 * m))])},
-        ]
-        slide = np.hypot(dd[closed, 1], dd[closed, 2])
-        alpha0 = np.hypot(forces[closed, 1], forces[closed, 2]) / np.maximum(slide, 1e-3)
-        x0 = np.concatenate([basis.T @ (motion - q0), forces[closed, 0], alpha0])
-        bounds = [(None, None)] * n_y + [(0.0, None)] * (2 * m)
-        outcome = minimize(lambda x: float(x[n_y:] @ x[n_y:]), x0,
-                           jac=lambda x: np.concatenate([np.zeros(n_y), 2 * x[n_y:]]),
-                           method="SLSQP", bounds=bounds, constraints=constraints,
-                           options={"maxiter": POLISH_ITERATIONS, "ftol": 1e-12})
-        q = split(outcome.x)[0]
-        return q if np.all(np.isfinite(q)) else None
 
     # --- the result -------------------------------------------------------------------------------------------
 

@@ -84,11 +84,10 @@ def test_an_undecided_milp_ends_in_ipopt_on_problem_11_when_casadi_is_installed(
 
 def test_without_casadi_an_undecided_answer_says_how_to_get_the_papers_solver(monkeypatch):
     from interlock.blocks import semicircular_arch
-    from interlock.verify import cra_ipopt
-    from interlock.verify.cra import _Problem
+    from interlock.verify import cra_ipopt, cra_local
 
     monkeypatch.setattr(cra_ipopt, "available", lambda: False)
-    monkeypatch.setattr(_Problem, "_polish", lambda *args, **kwargs: None)  # SLSQP finds nothing either
+    monkeypatch.setattr(cra_local, "polish", lambda *args, **kwargs: None)  # SLSQP finds nothing either
     result = cra(semicircular_arch(8), math.tan(math.radians(43)), gravity=tilted_gravity("x", 4.0), time_limit=0.2)
     assert result.status == "inconclusive" and 'pip install "interlock[nlp]"' in result.message
 
