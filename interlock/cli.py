@@ -122,6 +122,9 @@ def _parser() -> argparse.ArgumentParser:
     stability.add_argument("--cone", default="paper", choices=("paper", "inner"),
                            help="paper: the circumscribed octagon; inner: an inscribed one (conservative)")
     stability.add_argument("--tilt-axis", metavar="AXIS", help="also find the critical tilt about x, y, xy30 or X,Y,Z")
+    stability.add_argument("--time-limit", type=float, default=None, metavar="SECONDS",
+                           help="cra: seconds per MILP before local solvers get the last word and an undecided "
+                                "answer is 'inconclusive' (default 60)")
     stability.add_argument("--json", action="store_true", help="print JSON instead of text")
     stability.set_defaults(run=_run_stability)
 
@@ -315,12 +318,18 @@ def _run_stability(args) -> int:
 
     paths = args.paths[0] if len(args.paths) == 1 else args.paths
     assembly = Assembly.load(paths) if args.fixed is None else Assembly.load(paths, frame=_indices(args.fixed))
-    analyse = cra if args.method == "cra" else rbe
-    result = analyse(assembly, args.mu, density=args.density, cone=args.cone)
+    if args.time_limit is not None and args.method != "cra":
+        raise InterlockError("--time-limit applies to --method cra only (rbe is one LP)")
+    cra_options = {} if args.time_limit is None else {"time_limit": args.time_limit}
+    if args.method == "cra":
+        result = cra(assembly, args.mu, density=args.density, cone=args.cone, **cra_options)
+    else:
+        result = rbe(assembly, args.mu, density=args.density, cone=args.cone)
     tilt = None
     if args.tilt_axis is not None:
         axis = args.tilt_axis if args.tilt_axis in ("x", "y", "xy30") else _numbers(args.tilt_axis, float, "--tilt-axis")
-        tilt = critical_tilt(assembly, axis, args.mu, method=args.method, density=args.density, cone=args.cone)
+        tilt = critical_tilt(assembly, axis, args.mu, method=args.method, density=args.density, cone=args.cone,
+                             cra_options=cra_options or None)
     if args.json:
         print(json.dumps({**result.to_dict(), "critical_tilt_degrees": tilt}, indent=2))
         return 0

@@ -193,6 +193,13 @@ def test_stability_reports_rbe_and_the_critical_tilt(capsys, shared_data):
     assert abs(record["critical_tilt_degrees"] - 15.0) <= 1.0  # the paper's Table 2, RBE, type-c about xy30
 
 
+def test_stability_cra_time_limit_reaches_the_milp(capsys, shared_data):
+    shelf = shared_data / "compas_cra" / "shelf-stable.json"  # the MILP does not decide it in 0.5 s
+    assert main(["stability", str(shelf), "--mu", "0.9", "--method", "cra", "--time-limit", "0.5", "--json"]) == 0
+    record = json.loads(capsys.readouterr().out)
+    assert "time_limit = 0.5 s" in record["message"]
+
+
 def test_stability_cra_says_model_h_falls_where_rbe_holds_it(capsys, shared_data):
     model_h = shared_data / "compas_cra" / "H.json"
     assert main(["stability", str(model_h), "--mu", "0.84", "--json"]) == 0
@@ -205,6 +212,8 @@ def test_stability_cra_says_model_h_falls_where_rbe_holds_it(capsys, shared_data
     (["--mu", "-1"], "mu must be a finite number >= 0"),
     (["--mu", "-1", "--method", "cra"], "mu must be a finite number >= 0"),
     (["--mu", "0.5", "--tilt-axis", "1,x,0"], "expected comma-separated numbers"),
+    (["--mu", "0.5", "--time-limit", "5"], "--time-limit applies to --method cra only"),
+    (["--mu", "0.5", "--method", "cra", "--time-limit", "0"], "time_limit must be a finite number > 0"),
 ])
 def test_stability_bad_input_is_one_line(shared_data, argv, message):
     wedge = shared_data / "compas_cra" / "type-a.json"
