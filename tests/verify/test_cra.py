@@ -214,9 +214,10 @@ def test_a_block_pushed_into_its_groove_is_not_called_unstable(shared_data):
 
 def test_shelf_rbe_holds_it_and_cra_does_not_claim_it_stands(shared_data):
     # Fig. 7: RBE calls the shelf stable; 3DEC and the paper's CRA (IPOPT: infeasible) say blocks 9 and 10 slide.
-    # NOT REPRODUCED: our MILP (380 binaries) is undecided after 10 min (HiGHS; SCIP 10 after 7 min; HiGHS with
-    # heuristic effort 0.8 after 40 min), and IPOPT reports "infeasible" (or runs out of iterations) from its
-    # three starts, as in the paper, which proves nothing; so the exact answer is "inconclusive", never "stable".
+    # NOT REPRODUCED: our MILP (380 binaries) is undecided after 10 min (HiGHS; SCIP 10 after 7 min; HiGHS's
+    # heuristics at effort 0.8 find no point in 40 min), and IPOPT reports "infeasible" (or runs out of
+    # iterations) from its three starts, as in the paper, which proves nothing; so the exact answer is
+    # "inconclusive", never "stable".
     pytest.importorskip("casadi")
     assembly, found = _model(shared_data, "shelf")
     assert rbe(assembly, 0.9, contacts=found).stable
