@@ -45,7 +45,7 @@ decided globally:
    realises them exactly, and SLSQP solves (11) locally from the MILP's point; then the
    sectors are refined (``4 -> 8 -> 16``).
    If none of this gives a solution, or HiGHS does not decide within ``time_limit``, local solvers
-   have the last word: IPOPT on the whole of (11), as in the paper, if CasADi is installed
+   have the last word (above :data:`LOCAL_FIRST_BINARIES` binaries they go before the MILP): IPOPT on the whole of (11), as in the paper, if CasADi is installed
    (:mod:`interlock.verify.cra_ipopt`), then SLSQP from where the assembly settles (the motion
    closing the most vertices that, keeping them closed, does the most work).  If the exact LP
    accepts a motion they find, the answer is "stable", otherwise "inconclusive" (a local solver's
@@ -102,6 +102,9 @@ BOUND_MARGIN = 1e-3
 LOOSE = 10.0
 #: Seconds HiGHS may spend on one MILP before the answer is "inconclusive".
 DEFAULT_TIME_LIMIT = 60.0
+#: Above this many binaries (vertices times ``1 + sectors``) the local solvers run before the MILP, which
+#: rarely decides so large a model in time (the shelves of Fig. 7 and 12: 300-460; the wedges: 40-80).
+LOCAL_FIRST_BINARIES = 200
 #: Motions of earlier stable loads that :func:`decider` tries first.
 WARM_STARTS = 3
 
@@ -326,6 +329,16 @@ class _Problem:
             parameters = {**self.parameters, "sectors": tried, "gravity": gravity.tolist()}
             return self._result(status, message, forces * total if status == "stable" else None, motion,
                                 parameters, timings)
+        local = None  # (found, how) of the local solvers, once run
+        binaries = len(self.system.points) * (1 + sectors)
+        if binaries > LOCAL_FIRST_BINARIES:  # a MILP this large rarely decides in time: local solvers first
+            local = self._local(b_eq, rbe_forces, most_work, timings)
+            if local[0] is not None:
+                motion, forces = local[0]
+                message = (f"equilibrium realised by a virtual motion, found by {local[1]} (tried before the MILP, "
+                           f"which has {binaries} binaries)")
+                parameters = {**self.parameters, "sectors": tried, "gravity": gravity.tolist()}
+                return self._result("stable", message, forces * total, motion, parameters, timings)
         started = time.perf_counter()
         force_bounds = self._force_bounds(b_eq, work)  # the big Ms of every MILP below
         timings["milp"] += time.perf_counter() - started
@@ -359,9 +372,7 @@ class _Problem:
                 break
             message = f"the MILP's motions could not be made exact with up to {count} sectors"
         if status == "inconclusive":  # last resort: local solves of (11), checked by the exact LP
-            started = time.perf_counter()
-            found, how = cra_local.last_resort(self, b_eq, rbe_forces.reshape(-1, 3), most_work, timings)
-            timings["lp"] += time.perf_counter() - started - timings.get("ipopt", 0.0)
+            found, how = local if local is not None else self._local(b_eq, rbe_forces, most_work, timings)
             if found is not None:
                 status, (motion, forces) = "stable", found
                 message = (f"equilibrium realised by a virtual motion, found by {how} (the MILP did not decide: "
@@ -371,6 +382,13 @@ class _Problem:
         parameters = {**self.parameters, "sectors": tried, "gravity": gravity.tolist()}
         return self._result(status, message, forces * total if status == "stable" else None,
                             motion if status == "stable" else None, parameters, timings)
+
+    def _local(self, b_eq, rbe_forces, most_work, timings):
+        """:func:`~interlock.verify.cra_local.last_resort`, timed (``lp`` for SLSQP and the checks, ``ipopt``)."""
+        started = time.perf_counter()
+        found = cra_local.last_resort(self, b_eq, rbe_forces.reshape(-1, 3), most_work, timings)
+        timings["lp"] += time.perf_counter() - started - timings.get("ipopt", 0.0)
+        return found
 
     def _quick(self, b_eq, rbe_forces, known=(), most_work=None):
         """Decide quickly where possible: no RBE equilibrium (``rbe_forces`` None) means "unstable" (CRA only
