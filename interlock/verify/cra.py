@@ -45,11 +45,11 @@ decided globally:
    realises them exactly, and SLSQP solves (11) locally from the MILP's point; then the
    sectors are refined (``4 -> 8 -> 16``).
    If none of this gives a solution, or HiGHS does not decide within ``time_limit``, local solvers
-   have the last word (above :data:`LOCAL_FIRST_BINARIES` binaries they go before the MILP): IPOPT on the whole of (11), as in the paper, if CasADi is installed
-   (:mod:`interlock.verify.cra_ipopt`), then SLSQP from where the assembly settles (the motion
-   closing the most vertices that, keeping them closed, does the most work).  If the exact LP
-   accepts a motion they find, the answer is "stable", otherwise "inconclusive" (a local solver's
-   "infeasible" proves nothing).
+   have the last word (above :data:`LOCAL_FIRST_BINARIES` binaries they go before the MILP): IPOPT
+   on the whole of (11), as in the paper, if CasADi is installed (:mod:`interlock.verify.cra_ipopt`),
+   then SLSQP from where the assembly settles (the motion closing the most vertices that, keeping
+   them closed, does the most work).  If the exact LP accepts a motion they find, the answer is
+   "stable", otherwise "inconclusive" (a local solver's "infeasible" proves nothing).
 
 Only the ratio ``eta / eps`` matters (the constraints are homogeneous in
 ``(dq, eps, eta)``); internally lengths of the motion are in units of ``eps``.
