@@ -312,6 +312,8 @@ def _run_periodic(args) -> int:
 
 
 def _run_stability(args) -> int:
+    from tqdm import tqdm
+
     from interlock.blocks import Assembly
     from interlock.verify import critical_tilt, rbe
     from interlock.verify.cra import cra
@@ -328,8 +330,13 @@ def _run_stability(args) -> int:
     tilt = None
     if args.tilt_axis is not None:
         axis = args.tilt_axis if args.tilt_axis in ("x", "y", "xy30") else _numbers(args.tilt_axis, float, "--tilt-axis")
-        tilt = critical_tilt(assembly, axis, args.mu, method=args.method, density=args.density, cone=args.cone,
-                             cra_options=cra_options or None)
+        with tqdm(desc=f"tilt about {args.tilt_axis}", unit="angle", disable=None) as bar:
+            def advance(angle, stable):
+                bar.set_postfix_str(f"{angle:.2f} deg {'stable' if stable else 'not stable'}")
+                bar.update(1)
+
+            tilt = critical_tilt(assembly, axis, args.mu, method=args.method, density=args.density, cone=args.cone,
+                                 cra_options=cra_options or None, progress=advance)
     if args.json:
         print(json.dumps({**result.to_dict(), "critical_tilt_degrees": tilt}, indent=2))
         return 0

@@ -195,7 +195,7 @@ def tilted_gravity(axis, angle: float, gravity=(0.0, 0.0, -1.0)) -> np.ndarray:
 
 def critical_tilt(assembly: Assembly, axis, mu: float, method: str = "rbe", density: float = 1.0,
                   frame=None, cone: str = "paper", sides: int = DEFAULT_SIDES, step: float = DEFAULT_TILT_STEP,
-                  tol: float = DEFAULT_TILT_TOL, contacts=None, cra_options=None) -> float:
+                  tol: float = DEFAULT_TILT_TOL, contacts=None, cra_options=None, progress=None) -> float:
     """The smallest tilt angle (degrees, in [0, 180]) at which the assembly is no longer stable.
 
     The assembly is turned counter-clockwise about ``axis`` ("x", "y", "xy30" =
@@ -218,6 +218,8 @@ def critical_tilt(assembly: Assembly, axis, mu: float, method: str = "rbe", dens
         Scan step and bisection tolerance in degrees; a stable window narrower
         than ``step`` after the first unstable angle cannot be missed, but an
         unstable window narrower than ``step`` can.
+    progress : callable, optional
+        Called as ``progress(angle, stable)`` after each angle is decided (the CLI's progress bar).
 
     Other parameters are those of :func:`rbe`.
 
@@ -239,7 +241,7 @@ def critical_tilt(assembly: Assembly, axis, mu: float, method: str = "rbe", dens
     if method == "rbe":
         system = _System.build(assembly, mu, density, frame, cone, sides, contacts)
 
-        def stable(angle: float) -> bool:
+        def decide(angle: float) -> bool:
             return system.feasible(tilted_gravity(axis, angle))
     else:
         from interlock.verify.cra import decider
@@ -247,8 +249,14 @@ def critical_tilt(assembly: Assembly, axis, mu: float, method: str = "rbe", dens
         stable_under = decider(assembly, mu, density=density, frame=frame, cone=cone, sides=sides,
                                contacts=contacts, **(cra_options or {}))
 
-        def stable(angle: float) -> bool:
+        def decide(angle: float) -> bool:
             return stable_under(tilted_gravity(axis, angle)) is True
+
+    def stable(angle: float) -> bool:
+        verdict = decide(angle)
+        if progress is not None:
+            progress(angle, verdict)
+        return verdict
 
     if not stable(0.0):
         return 0.0

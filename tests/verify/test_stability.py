@@ -76,6 +76,17 @@ def test_tall_block_tips_when_the_resultant_leaves_the_base():
     assert near.centres_of_pressure[0, 1] == pytest.approx(0.0, abs=0.02)
 
 
+@pytest.mark.parametrize("method", ["rbe", "cra"])
+def test_critical_tilt_reports_every_angle_it_decides(method):
+    # a block on a block slides at atan(0.5) = 26.57 deg: scan 0, 5, .., 30 (unstable), then bisect (25, 30)
+    seen = []
+    angle = critical_tilt(_stack(), "x", 0.5, method=method, progress=lambda a, ok: seen.append((a, ok)))
+    angles = [a for a, _ in seen]
+    assert angles[:8] == [0.0, 5.0, 10.0, 15.0, 20.0, 25.0, 30.0, 27.5]
+    assert all(ok for a, ok in seen if a < 26.5) and not any(ok for a, ok in seen if a > 26.6)
+    assert min(a for a, ok in seen if not ok) == angle
+
+
 def test_tilted_gravity_turns_the_assembly_counter_clockwise():
     # turning the assembly by +90 deg about x brings its +y axis up, so gravity points along -y in its frame
     assert tilted_gravity("x", 90) == pytest.approx([0, -1, 0], abs=1e-12)
