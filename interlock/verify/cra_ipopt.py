@@ -2,8 +2,9 @@
 
 The paper solves (11) with IPOPT [75] and calls an assembly unstable when
 IPOPT reports the problem infeasible.  A local solver proves nothing either
-way, so :func:`~interlock.verify.cra.cra` uses it only after the exact routes
-(quick answers, the MILP) and checks what it returns with the exact LP: a
+way, so :func:`~interlock.verify.cra.cra` uses it only where the exact routes
+have not decided (after the quick answers; after the MILP, or before it on
+models too large for it) and checks what it returns with the exact LP: a
 motion that passes is a solution of (11), whatever found it; one that does
 not, or "infeasible", leaves the verdict "inconclusive".
 
@@ -28,7 +29,7 @@ import scipy.sparse as sp
 __all__ = ["MISSING_MESSAGE", "IPOPT_ITERATIONS", "available", "local_solutions"]
 
 MISSING_MESSAGE = 'IPOPT is not installed: pip install "interlock[nlp]" (CasADi, whose wheels carry IPOPT)'
-#: Most IPOPT iterations per start (shelf-stable takes 400-700; the 36-voussoir arch about 14 ms each).
+#: Most IPOPT iterations per start (shelf-stable takes 400-700; an iteration on the 36-voussoir arch 14 ms).
 IPOPT_ITERATIONS = 1000
 #: IPOPT's convergence tolerance; the exact LP decides afterwards, so it need not be tight.
 IPOPT_TOLERANCE = 1e-9
@@ -72,7 +73,7 @@ def local_solutions(a_eq, a_ub, b_eq, ratio: float, starts, iterations: int = IP
     --------
     One unit cube on a fixed one, in units of its weight and of ``eps``:
 
-    >>> import numpy as np, scipy.sparse as sp, trimesh
+    >>> import numpy as np, trimesh
     >>> from interlock.blocks import Assembly
     >>> from interlock.verify.stability import _System
     >>> cubes = [trimesh.creation.box(bounds=[[0, 0, z], [1, 1, z + 1]]) for z in (0, 1)]
