@@ -1,7 +1,7 @@
 """Local repairs and local solves of CRA's problem (11); every motion they find is checked by the exact LP.
 
 :func:`~interlock.verify.cra.cra` decides (11) by quick answers, a MILP and
-an exact LP at a motion (``_Problem._exact``).  The functions here find
+an exact LP at a motion (``_Problem.exact``).  The functions here find
 candidate motions; none of them proves anything by itself:
 
 - :func:`least_friction` and :func:`realise`: an RBE equilibrium that needs
@@ -37,7 +37,7 @@ ACTIVE_TOL = 1e-7
 SNAP_TOL = 1e-2
 #: Most closed vertices for the local (SLSQP) repair of a MILP point; beyond, only the LP repairs run.
 POLISH_LIMIT = 100
-#: Most closed vertices for the last-resort SLSQP solve after an undecided MILP (dense: the 148 of the
+#: Most closed vertices for the last-resort SLSQP solve (dense: the 148 of the
 #: 38-block arch take 30-60 s).
 LAST_RESORT_LIMIT = 200
 #: Most SLSQP iterations per local solve.
