@@ -15,8 +15,8 @@ CATEGORIES = ("interlocked", "not interlocked", "inconclusive", "invalid deforma
 #: Their colours (Okabe-Ito, colour-blind safe): bluish green, vermillion, orange, grey, black.
 COLOURS = ("#009E73", "#D55E00", "#E69F00", "#999999", "#000000")
 # Verdict word -> category: the positive words, the negative words, "inconclusive".
-_WORDS = {"interlocked": 0, "holds": 0, "stable": 0, "not interlocked": 1, "fails": 1, "unstable": 1,
-          "inconclusive": 2}
+_WORDS = {"interlocked": 0, "holds": 0, "stable": 0, "not interlocked": 1, "not infinitesimally interlocked": 1,
+          "fails": 1, "unstable": 1, "inconclusive": 2}
 _STATUS = {"invalid": 3, "failed": 4}
 # Colours of the theory lines (Okabe-Ito blue, reddish purple, sky blue), cycled.
 _THEORY_COLOURS = ("#0072B2", "#CC79A7", "#56B4E9")
@@ -26,7 +26,7 @@ def verdict_map(records, x: str, y: str, verdict: str = "periodic", path=None, t
     """Draw the verdict of each point of a sweep over two of its parameters.
 
     Each point falls in one of :data:`CATEGORIES`, coloured by :data:`COLOURS`: the positive word
-    (interlocked, holds, stable), the negative word (not interlocked, fails, unstable), inconclusive,
+    (interlocked, holds, stable), the negative word (not (infinitesimally) interlocked, fails, unstable), inconclusive,
     invalid deformation (status ``"invalid"``), failed (status ``"failed"``); the legend names the
     words that occur, with counts.  Points filling a grid in (x, y) are an image with cell edges
     halfway between grid values; other points (random samples, a grid with gaps) a scatter.

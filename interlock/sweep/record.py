@@ -10,7 +10,9 @@ A record is a JSON-ready dict::
 or :class:`TilingError`, e.g. a self-intersecting ``F'``); "failed" means an
 unexpected error at this point, whose type and text are the message.  Neither
 stops a sweep.  Verdict words: "interlocked" / "not interlocked" /
-"inconclusive" (periodic, patch), "holds" / "fails" / "inconclusive"
+"inconclusive" (periodic), "interlocked" / "not infinitesimally interlocked" /
+"inconclusive" (patch: the first-order verdict of :func:`~interlock.verify.check`,
+whose motion need not be a finite one), "holds" / "fails" / "inconclusive"
 (criterion_4_3), "stable" / "unstable" (stability).
 """
 
@@ -108,7 +110,8 @@ def _verdicts(spec: SweepSpec, parameters: dict) -> tuple[dict, dict]:
             verdicts[name] = {True: "holds", False: "fails", None: "inconclusive"}[criterion_4_3(block).holds]
         elif name == "patch":
             verdict = check(finite, validate=False)
-            verdicts[name] = {True: "interlocked", False: "not interlocked", None: "inconclusive"}[verdict.interlocked]
+            verdicts[name] = {True: "interlocked", False: "not infinitesimally interlocked",
+                              None: "inconclusive"}[verdict.interlocked]
             tolerances[name] = dict(verdict.tolerances)
         elif name == "stability":
             result = rbe(finite, spec.mu)

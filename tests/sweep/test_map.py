@@ -88,7 +88,8 @@ def test_cell_edges_lie_halfway_between_uneven_grid_values():
 
 @pytest.mark.parametrize("verdict, positive, negative", [("stability", "stable", "unstable"),
                                                           ("criterion_4_3", "holds", "fails"),
-                                                          ("patch", "interlocked", "not interlocked")])
+                                                          ("patch", "interlocked", "not interlocked"),
+                                                          ("patch", "interlocked", "not infinitesimally interlocked")])
 def test_legend_uses_the_words_of_the_verdict(verdict, positive, negative):
     records = [record(n, n % 2, n // 2, positive if n < 3 else negative, verdict=verdict) for n in range(4)]
     fig = verdict_map(records, "s0", "t0", verdict=verdict)

@@ -80,6 +80,13 @@ def test_records_hold_verdicts_and_invalid_points_do_not_stop_the_sweep():
     json.dumps(records)  # plain data
 
 
+def test_a_patch_with_a_first_order_motion_is_worded_not_infinitesimally_interlocked():
+    # the first-order verdict's motion need not be a finite one, so a sweep record does not say "not interlocked"
+    spec = load_spec({**P1, "verdicts": ["patch"]})
+    assert evaluate(spec, 0, {"s": 0.0, "u": 0.0})["verdicts"] == {"patch": "not infinitesimally interlocked"}
+    assert evaluate(spec, 1, {"s": 0.2, "u": 0.15})["verdicts"] == {"patch": "interlocked"}
+
+
 def test_p1_verdicts_follow_theorem_4_7():
     for r in _threads(P1):
         assert r["status"] == "ok"
