@@ -18,6 +18,8 @@ import scipy.sparse as sp
 from interlock.blocks import Assembly
 
 RESULTS = Path(__file__).resolve().parent / "results"
+#: The reference data of other projects (TopoLite, compas_cra), kept with the tests.
+REFERENCE_DATA = Path(__file__).resolve().parents[1] / "tests" / "data"
 #: Environment variable naming another folder for results (``--results DIR``): quick runs in tests write there.
 RESULTS_VARIABLE = "INTERLOCK_BENCHMARK_RESULTS"
 

@@ -1,6 +1,6 @@
 """Stability under self-weight side by side with compas_cra 0.8: RBE, CRA and the interlocking verdict.
 
-The assemblies are compas_cra's own sample files (``../shared/data/compas_cra``)
+The assemblies are compas_cra's own sample files (``tests/data/compas_cra``)
 with the supports and parameters of the upstream examples:
 
 - the wedges ``type-a`` … ``type-d`` of the CRA paper's Table 2, tilted about
@@ -9,7 +9,7 @@ with the supports and parameters of the upstream examples:
   ``shelf`` (unstable, Fig. 7) and ``shelf-stable``, the ``cubes`` and the
   ``bridge``, upright only (the paper's statements are about 0°).
 
-Per case and angle: the verdicts of our :func:`~interlock.verify.stability.rbe`
+Per case and angle: the verdicts of our :func:`~interlock.verify.statics.rbe`
 and ``cra`` (``interlock.verify.cra``, guarded until it exists), the
 interlocking verdict of :func:`~interlock.verify.check` (gravity-free: an
 interlocked assembly carries any load, a not interlocked one is not claimed
@@ -35,23 +35,20 @@ import contextlib
 import inspect
 import io
 import math
-import os
 import statistics
 import time
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 import trimesh
 
-from benchmarks.common import BLAS_THREADS, limited_blas, main, pyplot, results_folder, write_json
+from benchmarks.common import BLAS_THREADS, REFERENCE_DATA, limited_blas, main, pyplot, results_folder, write_json
 from interlock.blocks import load_compas
 from interlock.blocks.compas import UPSTREAM_SUPPORTS
 from interlock.verify import check, contacts
-from interlock.verify.stability import TILT_AXES, rbe, tilted_gravity
+from interlock.verify.statics import TILT_AXES, rbe, tilted_gravity
 
-DATA = Path(os.environ.get("INTERLOCK_SHARED_DATA") or Path(__file__).resolve().parents[2] / "shared" / "data") \
-    / "compas_cra"
+DATA = REFERENCE_DATA / "compas_cra"
 #: Table 2 of the CRA paper: critical tilt (degrees) by (wedge, axis), as (3DEC, CRA, RBE) at mu 0.20 and 0.84.
 TABLE2 = {
     ("type-a", "x"): ((21.8, 21.8, 25.0), (59.2, 59.2, 180.0)),
@@ -597,7 +594,7 @@ def _upstream_solve(upstream, method, assembly, case, mu=None):
 
 def _ours_cra():
     try:
-        from interlock.verify.cra import cra
+        from interlock.verify.statics import cra
     except ImportError as error:
         return None, f"interlock.verify.cra is not there yet ({error})"
     return cra, None

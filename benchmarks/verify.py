@@ -16,19 +16,16 @@ How the stages grow with the number of blocks is ``benchmarks/scaling.py``.
 
 from __future__ import annotations
 
-import os
 
 import statistics
 import time
-from pathlib import Path
 
-from benchmarks.common import (BLAS_THREADS, NAIVE_STAGES, limited_blas, main, naive_verdict, pyplot, save_chart,
-                               write_json)
+from benchmarks.common import (BLAS_THREADS, NAIVE_STAGES, REFERENCE_DATA, limited_blas, main, naive_verdict, pyplot,
+                               save_chart, write_json)
 from interlock.blocks import Assembly
 from interlock.verify import check
 
-BUNNY = Path(os.environ.get("INTERLOCK_SHARED_DATA") or Path(__file__).resolve().parents[2] / "shared" / "data") \
-    / "topolite" / "bunny"
+BUNNY = REFERENCE_DATA / "topolite" / "bunny"
 BUNNY_PARTS = 80
 FRAME = (0, 1)
 #: The stages drawn, in order (validation only in the validated run).

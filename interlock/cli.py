@@ -250,7 +250,7 @@ def _run_verify(args) -> int:
     if args.frames and verdict.finite_motion is not None and verdict.finite_motion.shown:
         import importlib.util
 
-        from interlock.verify.motion import export_motion
+        from interlock.gallery.motion import export_motion
 
         frames = export_motion(assembly, verdict.finite_motion, args.frames)
         if importlib.util.find_spec("matplotlib") is not None:  # pictures too, with the plot extra
@@ -316,7 +316,7 @@ def _run_stability(args) -> int:
 
     from interlock.blocks import Assembly
     from interlock.verify import critical_tilt, rbe
-    from interlock.verify.cra import cra
+    from interlock.verify.statics import cra
 
     paths = args.paths[0] if len(args.paths) == 1 else args.paths
     assembly = Assembly.load(paths) if args.fixed is None else Assembly.load(paths, frame=_indices(args.fixed))

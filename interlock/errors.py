@@ -1,6 +1,6 @@
 """The exception hierarchy: every error raised on bad input is an ``InterlockError``."""
 
-__all__ = ["InterlockError", "GroupError", "LatticeError", "GalleryError"]
+__all__ = ["InterlockError", "GroupError", "LatticeError", "AssemblyError", "GalleryError"]
 
 
 class InterlockError(ValueError):
@@ -17,6 +17,10 @@ class GroupError(InterlockError):
 
 class LatticeError(InterlockError):
     """Lattice parameters that are not allowed for the group's crystal system."""
+
+
+class AssemblyError(InterlockError):
+    """Meshes, transforms, labels, a frame or a file that do not form an assembly."""
 
 
 class GalleryError(InterlockError):

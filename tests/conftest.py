@@ -1,6 +1,5 @@
-"""Shared fixtures: lattice parameters per crystal system and the reference data folder."""
+"""Shared fixtures: lattice parameters per crystal system and the reference data of other projects."""
 
-import os
 from pathlib import Path
 
 import pytest
@@ -8,7 +7,8 @@ import pytest
 from interlock import wallpaper
 
 ROOT = Path(__file__).resolve().parents[1]
-SHARED_DATA = Path(os.environ.get("INTERLOCK_SHARED_DATA", ROOT.parent / "shared" / "data"))
+#: TopoLite and compas_cra files with their licences; ``tests/data/README.md`` gives provenance and verdicts.
+REFERENCE_DATA = ROOT / "tests" / "data"
 
 #: Several lattices per crystal system (a, b, gamma); None means the default.
 LATTICES = {
@@ -30,7 +30,7 @@ def all_groups_and_lattices():
 
 
 @pytest.fixture(scope="session")
-def shared_data():
-    if not SHARED_DATA.is_dir():
-        pytest.skip(f"reference data folder {SHARED_DATA} is absent (it lives beside the project, in ../shared/data)")
-    return SHARED_DATA
+def reference_data():
+    """The reference data folder ``tests/data`` (part of the repository: a missing file is a failure, not a skip)."""
+    assert REFERENCE_DATA.is_dir(), f"the reference data folder {REFERENCE_DATA} is missing from the checkout"
+    return REFERENCE_DATA

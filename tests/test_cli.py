@@ -185,23 +185,23 @@ def test_help_shows_an_example(command, capsys):
     assert "example" in capsys.readouterr().out
 
 
-def test_stability_reports_rbe_and_the_critical_tilt(capsys, shared_data):
-    wedge = shared_data / "compas_cra" / "type-c.json"
+def test_stability_reports_rbe_and_the_critical_tilt(capsys, reference_data):
+    wedge = reference_data / "compas_cra" / "type-c.json"
     assert main(["stability", str(wedge), "--mu", "0.2", "--tilt-axis", "xy30", "--json"]) == 0
     record = json.loads(capsys.readouterr().out)
     assert record["stable"] is True
     assert abs(record["critical_tilt_degrees"] - 15.0) <= 1.0  # the paper's Table 2, RBE, type-c about xy30
 
 
-def test_stability_cra_time_limit_reaches_the_milp(capsys, shared_data):
-    model_h = shared_data / "compas_cra" / "H.json"  # its MILP proves "unstable" in about a second, not in 0.01 s
+def test_stability_cra_time_limit_reaches_the_milp(capsys, reference_data):
+    model_h = reference_data / "compas_cra" / "H.json"  # its MILP proves "unstable" in about a second, not in 0.01 s
     assert main(["stability", str(model_h), "--mu", "0.84", "--method", "cra", "--time-limit", "0.01", "--json"]) == 0
     record = json.loads(capsys.readouterr().out)
     assert record["status"] == "inconclusive" and "time_limit = 0.01 s" in record["message"]
 
 
-def test_stability_cra_says_model_h_falls_where_rbe_holds_it(capsys, shared_data):
-    model_h = shared_data / "compas_cra" / "H.json"
+def test_stability_cra_says_model_h_falls_where_rbe_holds_it(capsys, reference_data):
+    model_h = reference_data / "compas_cra" / "H.json"
     assert main(["stability", str(model_h), "--mu", "0.84", "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["stable"] is True  # RBE: prestress between the walls
     assert main(["stability", str(model_h), "--mu", "0.84", "--method", "cra"]) == 0
@@ -215,8 +215,8 @@ def test_stability_cra_says_model_h_falls_where_rbe_holds_it(capsys, shared_data
     (["--mu", "0.5", "--time-limit", "5"], "--time-limit applies to --method cra only"),
     (["--mu", "0.5", "--method", "cra", "--time-limit", "0"], "time_limit must be a finite number > 0"),
 ])
-def test_stability_bad_input_is_one_line(shared_data, argv, message):
-    wedge = shared_data / "compas_cra" / "type-a.json"
+def test_stability_bad_input_is_one_line(reference_data, argv, message):
+    wedge = reference_data / "compas_cra" / "type-a.json"
     run = subprocess.run([sys.executable, "-m", "interlock", "stability", str(wedge), *argv], capture_output=True,
                          text=True)
     assert run.returncode == 2 and "Traceback" not in run.stderr

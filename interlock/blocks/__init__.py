@@ -8,8 +8,7 @@
 """
 
 from interlock.blocks.arch import semicircular_arch
-from interlock.blocks.assembly import Assembly, AssemblyError
-from interlock.blocks.compas import load_compas
+from interlock.blocks.assembly import Assembly, AssemblyError, load_compas
 from interlock.blocks.escher import Block, DeformationError, escher_block
 from interlock.blocks import presets
 from interlock.blocks.lozenge import Lozenge, LozengeTiling, TilingError, random_hexagon, staircase

@@ -88,7 +88,7 @@ def semicircular_arch(voussoirs: int = 36, thickness_ratio: float = 0.15, radius
 
     See Also
     --------
-    interlock.verify.stability.critical_tilt : the tilting test of Table 1.
+    interlock.verify.statics.critical_tilt : the tilting test of Table 1.
 
     Notes
     -----

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import re
 from collections.abc import Sequence
 from functools import cached_property
 from pathlib import Path
@@ -12,9 +11,11 @@ import numpy as np
 import shapely
 import trimesh
 
-from interlock.errors import InterlockError
+from interlock.blocks.compas import read_compas
+from interlock.blocks.meshfiles import BLOCK_DATA, HEADER_MARKER, STL_RECORD, read_bodies
+from interlock.errors import AssemblyError
 
-__all__ = ["Assembly", "AssemblyError", "NEIGHBOUR_RTOL", "RIGID_TOL", "KIND_DECIMALS", "HEADER_MARKER", "STL_RECORD",
+__all__ = ["Assembly", "AssemblyError", "load_compas", "NEIGHBOUR_RTOL", "RIGID_TOL", "KIND_DECIMALS", "HEADER_MARKER", "STL_RECORD",
            "BLOCK_DATA"]
 
 #: Bounding boxes closer than this (relative to the model size) count as touching.
@@ -24,17 +25,6 @@ RIGID_TOL = 1e-9
 #: Pairs of blocks whose relative transforms agree to this many decimals (lengths over the model size)
 #: are of one kind (:meth:`Assembly.pair_kinds`).
 KIND_DECIMALS = 9
-#: How an exported file says that it stores a block index per triangle, and how many blocks: the start of
-#: a binary STL's 80-byte header, or a PLY comment (``interlock blocks=12`` for 12 blocks).
-HEADER_MARKER = b"interlock blocks="
-#: One triangle of a binary STL: normal, three vertices, and the 2-byte attribute holding the block index.
-STL_RECORD = np.dtype([("normal", "<f4", 3), ("vertices", "<f4", (3, 3)), ("block", "<u2")])
-#: Name of the per-triangle block index in PLY (face property), VTU and XDMF (cell data) files.
-BLOCK_DATA = "block"
-
-
-class AssemblyError(InterlockError):
-    """Meshes, transforms, labels or a frame that do not form an assembly."""
 
 
 class Assembly:
@@ -124,17 +114,16 @@ class Assembly:
         Polygonal faces are triangulated.
         """
         if isinstance(paths, (str, Path)) and Path(paths).suffix.lower() == ".json":  # COMPAS; frame: node keys
-            from interlock.blocks.compas import load_compas
             return load_compas(paths, supports=list(frame or ()) or None)
         if isinstance(paths, (str, Path)):
             path = Path(paths)
-            bodies = _load_bodies(path)
+            bodies = read_bodies(path)
             labels = [f"{path.name}:{name}" for name, _ in bodies]
             return cls.from_meshes([m for _, m in bodies], frame=frame, labels=labels, info={"source": [str(path)]})
         paths = [Path(p) for p in paths]
         if not paths:
             raise AssemblyError("no mesh files given; pass one path or a list of paths")
-        meshes = [trimesh.util.concatenate([m for _, m in _load_bodies(p, split=False)]) for p in paths]
+        meshes = [trimesh.util.concatenate([m for _, m in read_bodies(p, split=False)]) for p in paths]
         return cls.from_meshes(meshes, frame=frame, labels=[p.name for p in paths],
                                info={"source": [str(p) for p in paths]})
 
@@ -294,6 +283,58 @@ class Assembly:
         return tuple(sorted(set(out)))
 
 
+def load_compas(path, supports=None) -> Assembly:
+    """An assembly from a COMPAS assembly JSON file, without COMPAS.
+
+    The file is ``{"dtype": "compas_assembly.datastructures/Assembly" (or
+    ``compas_cra...CRA_Assembly``), "data": {"graph": {"data": {"node": ...}}}}``;
+    each node holds a ``block`` (a COMPAS mesh: ``vertex`` key -> ``{x, y, z}``,
+    ``face`` key -> vertex keys) and optionally ``is_support``.  Polygonal faces
+    are triangulated (ear clipping in their plane, so non-convex faces work)
+    and every block must be closed.  Interfaces stored in the file are
+    ignored: :func:`interlock.verify.contacts` recomputes them.
+
+    Parameters
+    ----------
+    path : str or Path
+    supports : iterable of int, optional
+        Node keys of the fixed blocks (the frame).  Default: the nodes marked
+        ``is_support``; when none is, :data:`~interlock.blocks.compas.UPSTREAM_SUPPORTS` of the file's
+        stem (the supports of the upstream examples), else no frame.
+
+    Returns
+    -------
+    Assembly
+        One block per node in increasing key order; ``labels`` are the node
+        keys (int), ``frame`` the supports, ``info`` the source, dtype and
+        whether the supports came from the file, the argument or the table.
+
+    Raises
+    ------
+    AssemblyError
+        If the file is missing or not COMPAS assembly JSON, a block is not a
+        closed mesh, or a support key is not a node.
+
+    Examples
+    --------
+    >>> import json, pathlib, tempfile, trimesh
+    >>> from interlock.blocks.compas import COMPAS_DTYPES
+    >>> def node(mesh, support):
+    ...     vertex = {str(k): dict(zip("xyz", p)) for k, p in enumerate(mesh.vertices.tolist())}
+    ...     return {"block": {"data": {"vertex": vertex, "face": dict(enumerate(mesh.faces.tolist()))}},
+    ...             "is_support": support}
+    >>> cubes = [trimesh.creation.box(bounds=[[0, 0, z], [1, 1, z + 1]]) for z in (0, 1)]
+    >>> graph = {"node": {str(k): node(m, k == 0) for k, m in enumerate(cubes)}}
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "stack.json"
+    >>> _ = path.write_text(json.dumps({"dtype": COMPAS_DTYPES[0], "data": {"graph": {"data": graph}}}))
+    >>> a = load_compas(path)
+    >>> len(a), a.labels, a.frame, round(float(a.volumes.sum()), 9)
+    (2, (0, 1), (0,), 2.0)
+    """
+    meshes, labels, frame, info = read_compas(path, supports)
+    return Assembly.from_meshes(meshes, frame=frame, labels=labels, info=info)
+
+
 def _mesh_name(k: int, labels, one_mesh_per_block: bool) -> str:
     """How error messages name mesh ``k``: by its block (and label) when every block has its own mesh."""
     if not one_mesh_per_block:
@@ -345,148 +386,3 @@ def _checked_lattice(lattice) -> np.ndarray:
         raise AssemblyError("the two lattice vectors of a periodic cell must be linearly independent")
     lattice.setflags(write=False)
     return lattice
-
-
-def _load_bodies(path: Path, split: bool = True) -> list[tuple[str, trimesh.Trimesh]]:
-    """(name, mesh in file coordinates) for every block of a mesh file, in file order.
-
-    Stored block indices win (:func:`_indexed_blocks`), then the file's objects.
-    With ``split``, a file holding one object is split into its connected bodies;
-    without, the file is to be one block, so several stored blocks are refused.
-    """
-    if not path.is_file():
-        raise AssemblyError(f"mesh file {path} does not exist")
-    try:
-        blocks = _indexed_blocks(path)
-        bodies = _scene_objects(path) if blocks is None else blocks
-    except AssemblyError:
-        raise
-    except Exception as error:  # the readers raise many types for unreadable files
-        raise AssemblyError(f"cannot read {path} as a mesh ({type(error).__name__}: {error})") from None
-    if not bodies:
-        raise AssemblyError(f"{path} holds no triangle mesh")
-    if not split and blocks is not None and len(blocks) > 1:
-        raise AssemblyError(f"{path} holds {len(blocks)} blocks, which would merge into one in a list of "
-                            f"one file per block; load it on its own: Assembly.load({str(path)!r})")
-    if split and blocks is None and len(bodies) == 1:
-        parts = bodies[0][1].split(only_watertight=False)
-        if len(parts) > 1:
-            if not all(part.is_watertight for part in parts):
-                raise AssemblyError(f"{path} holds several bodies that touch, which a single {path.suffix} file cannot "
-                                    "separate; give one file per block, or an OBJ file with one object ('o') per block")
-            bodies = [(f"body{k}", part) for k, part in enumerate(parts)]
-    return bodies
-
-
-def _scene_objects(path: Path) -> list[tuple[str, trimesh.Trimesh]]:
-    """One mesh per object (OBJ ``o``) or scene node (GLB, 3MF), node transform applied, named by the node."""
-    obj = path.suffix.lower() == ".obj"
-    scene = trimesh.load_scene(path, **({"split_objects": True, "group_material": False} if obj else {}))
-    bodies = []
-    for node in scene.graph.nodes_geometry:
-        transform, name = scene.graph[node]
-        geometry = scene.geometry[name]
-        if isinstance(geometry, trimesh.Trimesh) and len(geometry.faces):
-            body = geometry.copy().apply_transform(transform)  # a reflection also flips the faces
-            body.merge_vertices(merge_tex=True, merge_norm=True)  # per-face normals must not split corners
-            bodies.append((str(node), body))
-    if obj and len(bodies) > 1:
-        order = [line.split(maxsplit=1)[1].strip() for line in path.read_text(errors="replace").splitlines()
-                 if line.startswith("o ") and len(line.split(maxsplit=1)) == 2]
-        bodies.sort(key=lambda body: order.index(body[0]) if body[0] in order else len(order))
-    elif len(bodies) > 1:
-        bodies.sort(key=lambda body: _natural_key(body[0]))
-    return bodies
-
-
-def _natural_key(name: str) -> tuple:
-    """Sort key reading runs of digits as numbers: ``block_9`` before ``block_10``."""
-    return tuple((0, int(part), "") if part.isdigit() else (1, 0, part) for part in re.split(r"(\d+)", name))
-
-
-def _indexed_blocks(path: Path) -> list[tuple[str, trimesh.Trimesh]] | None:
-    """The blocks of a file that stores a block index per triangle; None if it does not.
-
-    Binary STL with :data:`HEADER_MARKER` (the triangle attribute), PLY with an
-    ``interlock blocks=N`` comment (the face property :data:`BLOCK_DATA`), VTU
-    and XDMF (cell data :data:`BLOCK_DATA`, required).  Block ``k`` is named
-    ``block_k`` (four digits at least).
-    """
-    reader = {".stl": _stl_triangles, ".ply": _ply_triangles, ".vtu": _meshio_triangles,
-              ".xdmf": _meshio_triangles}.get(path.suffix.lower())
-    triangles = None if reader is None else reader(path)
-    return None if triangles is None else _split_by_block(path, *triangles)
-
-
-def _stl_triangles(path: Path):
-    """Vertices, faces, block per face and block count of a marked binary STL; None if unmarked."""
-    with open(path, "rb") as file:
-        header = file.read(80)
-        if not header.startswith(HEADER_MARKER):
-            return None
-        count = int.from_bytes(file.read(4), "little")
-        data = file.read()
-    if len(data) != count * STL_RECORD.itemsize:
-        raise AssemblyError(f"{path} is cut short or padded: its header announces {count} triangles "
-                            f"({count * STL_RECORD.itemsize} bytes), it holds {len(data)} bytes")
-    records = np.frombuffer(data, dtype=STL_RECORD)
-    vertices = records["vertices"].reshape(-1, 3).astype(float)
-    return vertices, np.arange(len(vertices)).reshape(-1, 3), records["block"], _block_count(header, path)
-
-
-def _ply_triangles(path: Path):
-    """Vertices, faces, block per face and block count of a PLY with an interlock comment; None without."""
-    with open(path, "rb") as file:
-        header = file.read(4096).split(b"end_header", 1)[0]
-        marker = re.search(rb"^comment (" + re.escape(HEADER_MARKER) + rb".*)$", header, re.MULTILINE)
-        if marker is None:
-            return None
-        file.seek(0)
-        loaded = trimesh.exchange.ply.load_ply(file)
-    properties = loaded["metadata"]["_ply_raw"]["face"]["data"]  # every face property as read, by name
-    names = properties.dtype.names if isinstance(properties, np.ndarray) else tuple(properties)
-    if BLOCK_DATA not in (names or ()):
-        raise AssemblyError(f"{path} says it holds interlock blocks but has no face property {BLOCK_DATA!r}")
-    return loaded["vertices"], loaded["faces"], properties[BLOCK_DATA], _block_count(marker.group(1), path)
-
-
-def _meshio_triangles(path: Path):
-    """Vertices, triangles and cell data :data:`BLOCK_DATA` of a VTU or XDMF file (meshio)."""
-    import meshio  # here, not above: it takes a tenth of a second to import, and few files need it
-
-    mesh = meshio.read(path)
-    kept = [k for k, cells in enumerate(mesh.cells) if cells.type == "triangle"]
-    if BLOCK_DATA not in mesh.cell_data or not kept:
-        raise AssemblyError(f"{path} has no triangles with cell data {BLOCK_DATA!r} telling the blocks apart; "
-                            "write it with interlock.gallery.export, or give one mesh file per block")
-    faces = np.vstack([mesh.cells[k].data for k in kept])
-    blocks = np.concatenate([np.ravel(mesh.cell_data[BLOCK_DATA][k]) for k in kept])
-    return mesh.points[:, :3], faces, blocks, None
-
-
-def _block_count(marker: bytes, path: Path) -> int:
-    """N from ``interlock blocks=N``."""
-    digits = re.match(rb"\d+", marker[len(HEADER_MARKER):])
-    if digits is None:
-        raise AssemblyError(f"{path} says it holds interlock blocks but not how many ({marker[:40]!r})")
-    return int(digits.group())
-
-
-def _split_by_block(path: Path, vertices, faces, blocks, count) -> list[tuple[str, trimesh.Trimesh]]:
-    """One mesh per block index (merged vertices), in index order; ``count`` blocks if given."""
-    blocks = np.asarray(blocks).astype(np.int64).ravel()
-    if len(blocks) != len(faces):
-        raise AssemblyError(f"{path} gives {len(blocks)} block indices for {len(faces)} triangles")
-    order = np.argsort(blocks, kind="stable")
-    indices, starts = np.unique(blocks[order], return_index=True)
-    if count is not None and not np.array_equal(indices, np.arange(count)):
-        found = f"{indices[0]}..{indices[-1]}" if len(indices) else "none"
-        raise AssemblyError(f"{path} announces {count} blocks 0..{count - 1} but its triangles carry "
-                            f"{len(indices)} distinct block indices ({found})")
-    bodies = []
-    for index, own in zip(indices.tolist(), np.split(order, starts[1:])):
-        used, local = np.unique(faces[own], return_inverse=True)
-        body = trimesh.Trimesh(vertices[used], local.reshape(-1, 3), process=False)
-        body.merge_vertices()
-        bodies.append((f"block_{index:04d}", body))
-    return bodies

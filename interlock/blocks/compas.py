@@ -8,9 +8,10 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
-from interlock.blocks.assembly import Assembly, AssemblyError
+from interlock import deprecation
+from interlock.errors import AssemblyError
 
-__all__ = ["load_compas", "UPSTREAM_SUPPORTS", "COMPAS_DTYPES"]
+__all__ = ["read_compas", "UPSTREAM_SUPPORTS", "COMPAS_DTYPES"]
 
 #: Node keys that the upstream compas_cra examples fix, by file stem, for the sample files that mark no
 #: block ``is_support`` (``data/compas_cra/README.md``): the wedges, ``A``, ``H`` and the bridge stand on
@@ -28,52 +29,12 @@ UPSTREAM_SUPPORTS: dict[str, tuple[int, ...]] = {
 COMPAS_DTYPES = ("compas_assembly.datastructures/Assembly", "compas_cra.datastructures/CRA_Assembly")
 
 
-def load_compas(path, supports=None) -> Assembly:
-    """An assembly from a COMPAS assembly JSON file, without COMPAS.
+def read_compas(path, supports=None) -> tuple[list[trimesh.Trimesh], list[int], list[int], dict]:
+    """The blocks of a COMPAS assembly JSON file: ``(meshes, labels, frame, info)``, as :func:`load_compas` uses them.
 
-    The file is ``{"dtype": "compas_assembly.datastructures/Assembly" (or
-    ``compas_cra...CRA_Assembly``), "data": {"graph": {"data": {"node": ...}}}}``;
-    each node holds a ``block`` (a COMPAS mesh: ``vertex`` key -> ``{x, y, z}``,
-    ``face`` key -> vertex keys) and optionally ``is_support``.  Polygonal faces
-    are triangulated (ear clipping in their plane, so non-convex faces work)
-    and every block must be closed.  Interfaces stored in the file are
-    ignored: :func:`interlock.verify.contacts` recomputes them.
-
-    Parameters
-    ----------
-    path : str or Path
-    supports : iterable of int, optional
-        Node keys of the fixed blocks (the frame).  Default: the nodes marked
-        ``is_support``; when none is, :data:`UPSTREAM_SUPPORTS` of the file's
-        stem (the supports of the upstream examples), else no frame.
-
-    Returns
-    -------
-    Assembly
-        One block per node in increasing key order; ``labels`` are the node
-        keys (int), ``frame`` the supports, ``info`` the source, dtype and
-        whether the supports came from the file, the argument or the table.
-
-    Raises
-    ------
-    AssemblyError
-        If the file is missing or not COMPAS assembly JSON, a block is not a
-        closed mesh, or a support key is not a node.
-
-    Examples
-    --------
-    >>> import json, pathlib, tempfile, trimesh
-    >>> def node(mesh, support):
-    ...     vertex = {str(k): dict(zip("xyz", p)) for k, p in enumerate(mesh.vertices.tolist())}
-    ...     return {"block": {"data": {"vertex": vertex, "face": dict(enumerate(mesh.faces.tolist()))}},
-    ...             "is_support": support}
-    >>> cubes = [trimesh.creation.box(bounds=[[0, 0, z], [1, 1, z + 1]]) for z in (0, 1)]
-    >>> graph = {"node": {str(k): node(m, k == 0) for k, m in enumerate(cubes)}}
-    >>> path = pathlib.Path(tempfile.mkdtemp()) / "stack.json"
-    >>> _ = path.write_text(json.dumps({"dtype": COMPAS_DTYPES[0], "data": {"graph": {"data": graph}}}))
-    >>> a = load_compas(path)
-    >>> len(a), a.labels, a.frame, round(float(a.volumes.sum()), 9)
-    (2, (0, 1), (0,), 2.0)
+    See :func:`~interlock.blocks.assembly.load_compas` for the format and the
+    meaning of ``supports``; ``frame`` holds block indices (positions in
+    increasing node-key order), ``labels`` the node keys.
     """
     path = Path(path)
     nodes, dtype = _nodes(path)
@@ -88,7 +49,7 @@ def load_compas(path, supports=None) -> Assembly:
                             f"{labels[0]}..{labels[-1]}")
     frame = sorted(index_of[key] for key in frame_keys)
     info = {"source": [str(path)], "format": "compas", "dtype": dtype, "supports_from": origin}
-    return Assembly.from_meshes(meshes, frame=frame, labels=labels, info=info)
+    return meshes, labels, frame, info
 
 
 def _nodes(path: Path) -> tuple[dict, str]:
@@ -213,3 +174,7 @@ def _cross(a, b, c) -> float:
 
 def _inside(p, a, b, c) -> bool:
     return _cross(a, b, p) >= 0 and _cross(b, c, p) >= 0 and _cross(c, a, p) >= 0
+
+
+# Deprecated: load_compas builds an Assembly, so it lives with the type (interlock.blocks.load_compas).
+__getattr__ = deprecation.moved(__name__, {"load_compas": "interlock.blocks.assembly"})

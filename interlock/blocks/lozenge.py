@@ -5,34 +5,20 @@ from __future__ import annotations
 import math
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
-from numbers import Integral
 
 import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import breadth_first_order
 
 from interlock.blocks.cftp import uniform_plane_partition
-from interlock.errors import InterlockError
+from interlock.blocks.trilattice import (DOWN, LATTICE_BASIS, LOZENGE_CORNERS, UP, UP_OFFSETS, Lozenge, TilingError,
+                                         as_integers, as_lozenges, as_plane_partition, as_region, cell_keys,
+                                         gauss_reduced, hexagon_sizes, hexagon_triangles, lookup, up_cells)
 
 __all__ = ["Lozenge", "LozengeTiling", "TilingError", "hexagon_triangles", "random_hexagon", "staircase",
            "LATTICE_BASIS", "UP", "DOWN", "UP_OFFSETS", "LOZENGE_CORNERS"]
 
-#: Vertex ``p(i, j)`` of the unit triangular lattice is ``i * LATTICE_BASIS[0] + j * LATTICE_BASIS[1]``.
-LATTICE_BASIS = np.array([[1.0, 0.0], [0.5, math.sqrt(3.0) / 2]])
-#: Triangle kinds: up-triangle ``U(i, j) = p(i, j) p(i+1, j) p(i, j+1)``, down-triangle
-#: ``D(i, j) = p(i+1, j) p(i, j+1) p(i+1, j+1)``.
-UP, DOWN = 0, 1
-#: A lozenge of orientation ``k`` is ``D(i, j)`` plus ``U((i, j) + UP_OFFSETS[k])``: the up-triangle across
-#: the down-triangle's top edge (0), left edge (1) or right edge (2).  Seen as a stack of unit cubes,
-#: orientation ``k`` is a face normal to the 3D axis ``k`` (x, y, z).
-UP_OFFSETS = np.array([[0, 1], [0, 0], [1, 0]])
-#: The four corners of a lozenge of each orientation, counter-clockwise, relative to ``p(i, j)``.
-LOZENGE_CORNERS = np.array([[[1, 0], [1, 1], [0, 2], [0, 1]],
-                            [[0, 0], [1, 0], [1, 1], [0, 1]],
-                            [[1, 0], [2, 0], [1, 1], [0, 1]]])
 
-# Lattice coordinates must stay below this in absolute value (triangles are packed into int64 keys).
-_COORD_BOUND = 2**20
 # Edges of each triangle kind as (start, end) offsets from p(i, j) in the positive directions
 # u = p(1, 0), v = p(-1, 1), w = p(0, -1); edge k of either triangle is the diagonal of orientation k.
 _EDGES = {UP: np.array([[[0, 0], [1, 0]], [[1, 0], [0, 1]], [[0, 1], [0, 0]]]),
@@ -43,42 +29,6 @@ _AROUND = np.array([[0, 0, UP], [-1, 0, UP], [0, -1, UP], [-1, 0, DOWN], [0, -1,
 _RISE, _DROP = 1, -2
 # D-triangle offset of a cube face normal to axis k from its corner p(i, j) (see from_plane_partition).
 _FACE_SHIFT = np.array([[-1, -1], [0, -1], [-1, 0]])
-
-
-class TilingError(InterlockError):
-    """Lozenges that overlap or leave gaps, or a plane partition or height function that is not valid."""
-
-
-@dataclass(frozen=True, order=True)
-class Lozenge:
-    """One lozenge: the down-triangle ``D(i, j)`` and its neighbour across edge ``orientation``.
-
-    >>> z = Lozenge(0, 0, 2)
-    >>> z.down, z.up, str(z)
-    ((0, 0), (1, 0), 'D(0, 0)+U(1, 0)')
-    """
-
-    i: int
-    j: int
-    orientation: int
-
-    def __post_init__(self):
-        for name in ("i", "j", "orientation"):
-            object.__setattr__(self, name, int(getattr(self, name)))
-        if self.orientation not in (0, 1, 2):
-            raise TilingError(f"a lozenge's orientation must be 0, 1 or 2, got {self.orientation}")
-
-    @property
-    def down(self) -> tuple[int, int]:
-        return (self.i, self.j)
-
-    @property
-    def up(self) -> tuple[int, int]:
-        di, dj = UP_OFFSETS[self.orientation].tolist()
-        return (self.i + di, self.j + dj)
-
-    def __str__(self) -> str:
-        return f"D{self.down}+U{self.up}"
 
 
 @dataclass(frozen=True, eq=False)
@@ -109,19 +59,19 @@ class LozengeTiling:
     periods: np.ndarray | None = None
 
     def __post_init__(self):
-        lozenges = _as_lozenges(self.lozenges)
+        lozenges = as_lozenges(self.lozenges)
         lozenges = lozenges[np.lexsort(lozenges.T[::-1])]
         lozenges.setflags(write=False)
         object.__setattr__(self, "lozenges", lozenges)
         if self.periods is not None:
-            periods = _integers(self.periods, "periods")
+            periods = as_integers(self.periods, "periods")
             if periods.shape != (2, 2) or round(np.linalg.det(periods)) == 0:
                 raise TilingError("periods must be two linearly independent integer vectors (lattice coordinates), "
                                   f"got {periods.tolist()}")
             periods.setflags(write=False)
             object.__setattr__(self, "periods", periods)
-        for kind, cells in ((DOWN, lozenges[:, :2]), (UP, _ups(lozenges))):
-            keys = _keys(self._reduce(cells), kind)
+        for kind, cells in ((DOWN, lozenges[:, :2]), (UP, up_cells(lozenges))):
+            keys = cell_keys(self._reduce(cells), kind)
             order = np.argsort(keys, kind="stable")
             twice = np.flatnonzero(np.diff(keys[order]) == 0)
             if twice.size:
@@ -143,12 +93,12 @@ class LozengeTiling:
         ... # doctest: +ELLIPSIS
         Traceback (most recent call last):
         ...
-        interlock.blocks.lozenge.TilingError: the lozenges leave 1 triangle(s) of the region uncovered, e.g. U(1, 0)...
+        interlock.blocks.trilattice.TilingError: the lozenges leave 1 triangle(s) of the region uncovered, e.g. U(1, 0)...
         """
         tiling = cls(lozenges)
         if region is not None:
-            region, tri = _as_region(region), tiling.triangles()
-            want, have = _keys(region[:, :2], region[:, 2]), _keys(tri[:, :2], tri[:, 2])
+            region, tri = as_region(region), tiling.triangles()
+            want, have = cell_keys(region[:, :2], region[:, 2]), cell_keys(tri[:, :2], tri[:, 2])
             for message, rows, missing in (("the lozenges leave {} triangle(s) of the region uncovered", region,
                                             ~np.isin(want, have)),
                                            ("{} triangle(s) of the lozenges lie outside the region", tri,
@@ -181,7 +131,7 @@ class LozengeTiling:
         >>> len(LozengeTiling.from_plane_partition(np.zeros((2, 3), int), c=4))
         26
         """
-        pp = _plane_partition(partition, c)
+        pp = as_plane_partition(partition, c)
         a, b = pp.shape
         x, y = np.indices((a, b)).reshape(2, -1)
         corners = [np.stack([x, y, pp.ravel()], axis=1)]  # the top faces
@@ -208,14 +158,14 @@ class LozengeTiling:
         """
         if not isinstance(heights, Mapping) or not heights:
             raise TilingError("a height function is a non-empty mapping {(i, j): height} over lattice vertices")
-        points = _integers(list(heights.keys()), "height function vertices").reshape(-1, 2)
-        values = _integers(list(heights.values()), "heights").reshape(-1)
-        order = np.argsort(_keys(points, 0))
+        points = as_integers(list(heights.keys()), "height function vertices").reshape(-1, 2)
+        values = as_integers(list(heights.values()), "heights").reshape(-1)
+        order = np.argsort(cell_keys(points, 0))
         cells = np.unique(np.concatenate([points - off for off in ((0, 0), (1, 0), (0, 1), (1, 1))]), axis=0)
         region, drop = [], []
         for kind in (UP, DOWN):
             ends = cells[:, None, None, :] + _EDGES[kind]  # (cells, 3 edges, 2 ends, 2)
-            idx, found = _lookup(_keys(points, 0), order, _keys(ends.reshape(-1, 2), 0))
+            idx, found = lookup(cell_keys(points, 0), order, cell_keys(ends.reshape(-1, 2), 0))
             inside = found.reshape(-1, 6).all(axis=1)
             rise = np.diff(values[idx].reshape(-1, 3, 2), axis=2)[inside, :, 0]
             bad = np.argwhere(~np.isin(rise, (_RISE, _DROP)))
@@ -227,10 +177,10 @@ class LozengeTiling:
             region.append(np.column_stack([cells[inside], np.full(inside.sum(), kind)]))
             drop.append(np.argmax(rise == _DROP, axis=1))  # exactly one edge of a triangle drops
         lozenges = np.column_stack([region[DOWN][:, :2], drop[DOWN]])
-        across = np.concatenate([region[UP][:, :2] - UP_OFFSETS[drop[UP]], _ups(lozenges)])
+        across = np.concatenate([region[UP][:, :2] - UP_OFFSETS[drop[UP]], up_cells(lozenges)])
         kinds = np.repeat([DOWN, UP], [len(drop[UP]), len(lozenges)])
         region = np.concatenate(region)
-        outside = ~np.isin(_keys(across, kinds), _keys(region[:, :2], region[:, 2]))
+        outside = ~np.isin(cell_keys(across, kinds), cell_keys(region[:, :2], region[:, 2]))
         if outside.any():
             raise TilingError(f"the heights drop by {-_DROP} across the region's boundary at "
                               f"{'UD'[kinds[outside][0]]}{tuple(across[outside][0].tolist())}; boundary edges must be "
@@ -272,15 +222,15 @@ class LozengeTiling:
     def triangles(self) -> np.ndarray:
         """The covered triangles, rows ``(i, j, UP|DOWN)``: the lozenges' down-triangles, then their up-triangles."""
         return np.concatenate([np.column_stack([self.lozenges[:, :2], np.full(len(self), DOWN)]),
-                               np.column_stack([_ups(self.lozenges), np.full(len(self), UP)])])
+                               np.column_stack([up_cells(self.lozenges), np.full(len(self), UP)])])
 
     def adjacency(self) -> np.ndarray:
         """Pairs ``(p, q)``, ``p <= q``, of lozenges sharing an edge (modulo the periods), shape (m, 2)."""
         loz = self.lozenges
         others = np.array([[m for m in range(3) if m != k] for k in range(3)])[loz[:, 2]]  # (n, 2)
-        cells = np.concatenate([loz[:, None, :2] + UP_OFFSETS[others], _ups(loz)[:, None] - UP_OFFSETS[others]], 1)
+        cells = np.concatenate([loz[:, None, :2] + UP_OFFSETS[others], up_cells(loz)[:, None] - UP_OFFSETS[others]], 1)
         keys = self._triangle_keys()  # the down-triangles of lozenges 0..n-1, then their up-triangles
-        idx, found = _lookup(keys, np.argsort(keys), _keys(self._reduce(cells), np.array([UP, UP, DOWN, DOWN])))
+        idx, found = lookup(keys, np.argsort(keys), cell_keys(self._reduce(cells), np.array([UP, UP, DOWN, DOWN])))
         pairs = np.stack([np.repeat(np.arange(len(loz)), 4), idx % max(len(loz), 1)], axis=1)[found.ravel()]
         return np.unique(np.sort(pairs, axis=1), axis=0).reshape(-1, 2)
 
@@ -299,7 +249,7 @@ class LozengeTiling:
         keys = np.sort(self._triangle_keys())
         corners = LOZENGE_CORNERS[self.lozenges[:, 2]] + self.lozenges[:, None, :2]  # (n, 4, 2)
         around = corners[:, :, None, :] + _AROUND[:, :2]
-        _, found = _lookup(keys, np.arange(len(keys)), _keys(around, _AROUND[:, 2]))
+        _, found = lookup(keys, np.arange(len(keys)), cell_keys(around, _AROUND[:, 2]))
         return tuple(np.flatnonzero(~found.reshape(len(self), -1).all(axis=1)).tolist())
 
     # --- height functions and plane partitions ------------------------------------------------------
@@ -329,7 +279,7 @@ class LozengeTiling:
         if len(order) < n:
             raise TilingError("height functions need a connected region; this tiling falls apart into pieces")
         steps = np.concatenate([a * n + b, b * n + a])  # the rise along each edge, both ways
-        idx, _ = _lookup(steps, np.argsort(steps), parent[order[1:]] * n + order[1:])
+        idx, _ = lookup(steps, np.argsort(steps), parent[order[1:]] * n + order[1:])
         total, up = np.zeros(n, dtype=np.int64), parent.copy()
         total[order[1:]], up[root] = np.concatenate([rise, -rise])[idx], root
         while np.any(up != root):  # pointer jumping; total[v] is the rise from up[v] to v
@@ -353,7 +303,7 @@ class LozengeTiling:
         ij = (LOZENGE_CORNERS[self.lozenges[:, 2]] + self.lozenges[:, None, :2]).reshape(-1, 2)
         a, b, c = int(ij[:, 0].max()), int(-ij[:, 0].min()), int(-ij[:, 1].min())
         hexagon = hexagon_triangles(a, b, c)
-        if not np.array_equal(np.sort(self._triangle_keys()), np.sort(_keys(hexagon[:, :2], hexagon[:, 2]))):
+        if not np.array_equal(np.sort(self._triangle_keys()), np.sort(cell_keys(hexagon[:, :2], hexagon[:, 2]))):
             raise TilingError("the tiling's region is not an a x b x c hexagon of hexagon_triangles(a, b, c) "
                               f"(its extent suggests a, b, c = {a}, {b}, {c}); only those are plane partitions")
         heights = self.height_function()
@@ -376,26 +326,7 @@ class LozengeTiling:
 
     def _triangle_keys(self) -> np.ndarray:
         tri = self.triangles()
-        return _keys(self._reduce(tri[:, :2]), tri[:, 2])
-
-
-def hexagon_triangles(a: int, b: int, c: int) -> np.ndarray:
-    """The triangles ``(i, j, UP|DOWN)`` of the ``a x b x c`` hexagon, the shadow of the box ``[0,a]x[0,b]x[0,c]``.
-
-    Its corners are ``p(a, 0), p(a-b, b), p(-b, b), p(-b, b-c), p(0, -c), p(a, -c)``:
-    ``-b <= i <= a``, ``-c <= j <= b`` and ``-c <= i+j <= a``.  It has ``2 (ab + bc + ca)`` triangles.
-
-    >>> len(hexagon_triangles(2, 2, 2))
-    24
-    """
-    a, b, c = _sizes(a, b, c)
-    i, j = np.mgrid[-b - 1:a + 1, -c - 1:b + 1].reshape(2, -1)
-    out = []
-    for kind, third in ((UP, 1), (DOWN, 2)):  # thrice the centroid: 3 (i, j) + third
-        x, y = 3 * i + third, 3 * j + third
-        inside = (-3 * b < x) & (x < 3 * a) & (-3 * c < y) & (y < 3 * b) & (-3 * c < x + y) & (x + y < 3 * a)
-        out.append(np.column_stack([i[inside], j[inside], np.full(inside.sum(), kind)]))
-    return np.concatenate(out)
+        return cell_keys(self._reduce(tri[:, :2]), tri[:, 2])
 
 
 def random_hexagon(a: int, b: int, c: int, seed) -> LozengeTiling:
@@ -431,7 +362,7 @@ def random_hexagon(a: int, b: int, c: int, seed) -> LozengeTiling:
     >>> len(t), t.orientation_counts
     (300, (100, 100, 100))
     """
-    a, b, c = _sizes(a, b, c)
+    a, b, c = hexagon_sizes(a, b, c)
     return LozengeTiling.from_plane_partition(uniform_plane_partition(a, b, c, np.random.default_rng(seed)), c)
 
 
@@ -448,7 +379,7 @@ def staircase(counts) -> LozengeTiling:
     >>> print(staircase((1, 1, 1)))
     periodic lozenge tiling: 3 lozenges (1/1/1 by orientation), periods [[1, 1], [1, -2]]
     """
-    n = _integers(counts, "staircase counts").reshape(-1)
+    n = as_integers(counts, "staircase counts").reshape(-1)
     if n.size != 3 or n.min() < 0 or n.max() == 0:
         raise TilingError(f"staircase needs three non-negative integers, not all zero, got {np.ravel(counts).tolist()}")
     n = n // math.gcd(*n.tolist())
@@ -462,93 +393,4 @@ def staircase(counts) -> LozengeTiling:
     value = (corners @ form) % total
     faces = [np.column_stack([corners[value < n[k]] + _FACE_SHIFT[k], np.full((value < n[k]).sum(), k)])
              for k in range(3)]
-    return LozengeTiling(np.concatenate(faces), _gauss_reduced(np.array([step, 0]), np.array([offset, rise])))
-
-
-# --- private helpers ------------------------------------------------------------------------------------
-
-def _sizes(a, b, c) -> tuple[int, int, int]:
-    for name, value in zip("abc", (a, b, c)):
-        if isinstance(value, (bool, np.bool_)) or not isinstance(value, Integral) or value < 0:
-            raise TilingError(f"hexagon side {name} must be an integer >= 0, got {value!r}")
-    return int(a), int(b), int(c)
-
-
-def _integers(values, what) -> np.ndarray:
-    try:
-        array = np.asarray(values)
-    except ValueError:
-        raise TilingError(f"{what} must be a rectangular array of integers") from None
-    if array.size and not (np.issubdtype(array.dtype, np.integer) or (np.issubdtype(array.dtype, np.floating)
-                                                                       and np.all(array == np.round(array)))):
-        raise TilingError(f"{what} must be integers, got {array.dtype} values")
-    if array.size and np.abs(array).max() >= _COORD_BOUND:
-        raise TilingError(f"{what} must stay below {_COORD_BOUND} in absolute value")
-    return array.astype(np.int64)
-
-
-def _as_lozenges(lozenges) -> np.ndarray:
-    if not isinstance(lozenges, np.ndarray):
-        lozenges = [(z.i, z.j, z.orientation) if isinstance(z, Lozenge) else z for z in lozenges]
-    array = _integers(lozenges, "lozenges")
-    if array.size == 0:
-        return np.zeros((0, 3), dtype=np.int64)
-    if array.ndim != 2 or array.shape[1] != 3:
-        raise TilingError(f"lozenges must be rows (i, j, orientation) or Lozenge objects, got shape {array.shape}")
-    if not np.isin(array[:, 2], (0, 1, 2)).all():
-        raise TilingError(f"a lozenge's orientation must be 0, 1 or 2, got {sorted(set(array[:, 2].tolist()))}")
-    return array.copy()
-
-
-def _as_region(region) -> np.ndarray:
-    array = _integers(region, "region").reshape(-1, 3)
-    if not np.isin(array[:, 2], (UP, DOWN)).all():
-        raise TilingError(f"region rows are (i, j, kind) with kind {UP} (up) or {DOWN} (down)")
-    return array
-
-
-def _plane_partition(partition, c) -> np.ndarray:
-    _sizes(0, 0, c)
-    pp = _integers(partition, "a plane partition")
-    if pp.ndim != 2:
-        raise TilingError(f"a plane partition is an a x b matrix of integers, got an array of shape {pp.shape}")
-    if pp.size and (pp.min() < 0 or pp.max() > c):
-        raise TilingError(f"plane partition entries must lie in 0..c = 0..{c}, got {pp.min()}..{pp.max()}")
-    for axis, where in ((0, "down its column"), (1, "along its row")):
-        rises = np.argwhere(np.diff(pp, axis=axis) > 0)
-        if rises.size:
-            r, s = rises[0].tolist()
-            after = (r + 1, s) if axis == 0 else (r, s + 1)
-            raise TilingError(f"plane partition entries must be non-increasing along rows and columns, but "
-                              f"{pp[r, s]} at {(r, s)} is followed by {pp[after]} {where}")
-    return pp
-
-
-def _ups(lozenges: np.ndarray) -> np.ndarray:
-    return lozenges[:, :2] + UP_OFFSETS[lozenges[:, 2]]
-
-
-def _keys(cells, kinds) -> np.ndarray:
-    """One int64 per (i, j, kind) (``kinds`` broadcast against the cells' leading axes)."""
-    cells = np.asarray(cells, dtype=np.int64)
-    kinds = np.broadcast_to(kinds, cells.shape[:-1])
-    return (((cells[..., 0] + _COORD_BOUND) * (4 * _COORD_BOUND) + (cells[..., 1] + _COORD_BOUND)) * 2 + kinds).ravel()
-
-
-def _lookup(keys, order, wanted) -> tuple[np.ndarray, np.ndarray]:
-    """Index into ``keys`` (sorted by ``order``) of each wanted key, and whether it is there."""
-    if not len(keys):
-        return np.zeros(len(wanted), dtype=np.int64), np.zeros(len(wanted), dtype=bool)
-    idx = order[np.minimum(np.searchsorted(keys[order], wanted), len(keys) - 1)]
-    return idx, keys[idx] == wanted
-
-
-def _gauss_reduced(u: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """A Lagrange-Gauss reduced basis of the lattice spanned by the integer vectors ``u, v``."""
-    while True:
-        if u @ u > v @ v:
-            u, v = v, u
-        k = int(round((u @ v) / (u @ u)))
-        if k == 0:
-            return np.array([u, v])
-        v = v - k * u
+    return LozengeTiling(np.concatenate(faces), gauss_reduced(np.array([step, 0]), np.array([offset, rise])))

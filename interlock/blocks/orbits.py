@@ -117,8 +117,8 @@ def cell_patch(cell: Assembly, radius: int) -> Assembly:
 
     The ring holds every translate that can touch a free one (``radius < max(|a|,
     |b|) <= radius + cell_reach(cell)``) and is the frame: a motion of this
-    finite assembly is a finite-support motion of the infinite one (DESIGN.md,
-    "Periodic reduction": the fallback of an inconclusive periodic verdict).
+    finite assembly is a finite-support motion of the infinite one (docs/periodic.md:
+    the fallback of an inconclusive periodic verdict).
 
     Labels are ``(a, b, i)``: lattice offset and block of the cell; ``info["cell_labels"]``
     keeps the cell's own labels (lozenges, group elements).

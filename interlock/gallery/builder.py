@@ -21,7 +21,7 @@ from interlock.gallery.export import export
 from interlock.gallery.render import render
 from interlock.verify import check, contacts, criterion_4_3, periodic_check
 from interlock.verify.check import beyond_first_order
-from interlock.verify.motion import export_motion
+from interlock.gallery.motion import export_motion
 
 __all__ = ["Claim", "Entry", "EntryResult", "Gallery", "entries", "build", "finite_word", "ESCHER_GROUPS",
            "REFLECTION_GROUPS", "MOTION_FRAMES"]

@@ -15,7 +15,8 @@ import trimesh
 from trimesh.visual import TextureVisuals
 from trimesh.visual.material import PBRMaterial
 
-from interlock.blocks.assembly import BLOCK_DATA, HEADER_MARKER, STL_RECORD, Assembly
+from interlock.blocks.assembly import Assembly
+from interlock.blocks.meshfiles import BLOCK_DATA, HEADER_MARKER, STL_RECORD
 from interlock.errors import GalleryError
 from interlock.gallery import appearance
 

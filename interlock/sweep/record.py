@@ -87,7 +87,7 @@ def deformation(spec: SweepSpec, parameters: dict) -> dict:
 
 def _verdicts(spec: SweepSpec, parameters: dict) -> tuple[dict, dict]:
     from interlock.verify import check, criterion_4_3, periodic_check
-    from interlock.verify.stability import rbe
+    from interlock.verify.statics import rbe
 
     verdicts, tolerances = {}, {}
     if "group" in spec.family:

@@ -1,4 +1,4 @@
-"""Rigorous re-checks of floating-point verdicts (DESIGN.md "Certified verdicts").
+"""Rigorous re-checks of floating-point verdicts (docs/certificates.md).
 
 * "interlocked": an exact positive self-stress.  Take the floating stress
   ``w >= 1``; pick ``n`` independent rows ``B`` of ``A`` (prove ``B``
@@ -216,7 +216,7 @@ RANK_POINTS = ((2, 3), (Fraction(3, 2), Fraction(-5, 7)))
 
 
 def certify_reduction(symbol, steps, ending: str) -> tuple[bool, str]:
-    """Replay the periodic facial reduction in exact rational arithmetic (DESIGN.md "Periodic reduction").
+    """Replay the periodic facial reduction in exact rational arithmetic (docs/periodic.md).
 
     Every float entry of the symbol ``A(z) = sum A_delta z^delta`` is taken as
     the exact rational it represents, and the cell motions ``P`` are kept as

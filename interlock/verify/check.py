@@ -59,7 +59,7 @@ class Verdict:
     ``interlocked`` is True (proved infinitesimally interlocked, hence
     interlocked by Prop. 3.10), False (a first-order motion exists: *not
     infinitesimally interlocked* — which does not by itself show that blocks
-    can really move, see DESIGN.md) or None when the floating-point evidence is
+    can really move, see docs/interlocking.md) or None when the floating-point evidence is
     inconclusive.  An inconclusive verdict may still carry the candidate
     ``motion`` it could not confirm (see ``bent_contacts``).
 

@@ -2,20 +2,17 @@
 
 from __future__ import annotations
 
-
 import math
-from dataclasses import dataclass, field, replace
-from numbers import Real
+from dataclasses import replace
 
 import numpy as np
 import shapely
-import trimesh
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 from interlock.blocks.assembly import NEIGHBOUR_RTOL, Assembly
-from interlock.errors import InterlockError
+from interlock.blocks.contact import Contact, ContactError
+from interlock.verify.facets import (DEFAULT_ANGLE_TOL, DEFAULT_CONTACT_RTOL, PLANAR_ULPS, TINY, Facets, FacetTable,
+                                     check_tolerance, clean_polygons, facets)
 
 __all__ = [
     "Contact",
@@ -30,14 +27,6 @@ __all__ = [
     "PLANAR_ULPS",
 ]
 
-#: Distance tolerance relative to the model size: two planes closer than this
-#: coincide, a gap narrower than this is a contact, an overlap thinner than this
-#: is an edge touch, and facet outlines are simplified within it.  Mesh files
-#: from CAD tools are often accurate to a few 1e-6 only (TopoLite's ``ania``).
-DEFAULT_CONTACT_RTOL = 1e-5
-#: Angle tolerance (radians): normals within it are parallel (facets) or
-#: opposite (contacts).  Rotated pieces in files may be off by ~4e-5 rad (``ania``).
-DEFAULT_ANGLE_TOL = 1e-4
 #: Contact polygons of area at most this times the model size squared are dropped.
 DEFAULT_AREA_RTOL = 1e-10
 #: Gap tolerance relative to the model size: facets whose planes are at most this far apart (beyond ``rtol``)
@@ -50,165 +39,6 @@ OVERLAY_GRID_RTOL = 1e-13
 #: Instanced pairs of one kind (:meth:`Assembly.pair_kinds`) share one contact computation; that path is
 #: taken when kinds are at most this share of the pairs.
 KIND_SHARE = 0.5
-
-#: A facet is planar when every vertex of its triangles lies within this many units in the last place (of
-#: the mesh's largest coordinate) of its plane, i.e. within rounding; farther means the tolerances grouped
-#: triangles that are not coplanar (a face bent by less than ``angle_tol``).  A bend of 1e-14 on a unit
-#: block is about 25 such units; rounding leaves well under one.
-PLANAR_ULPS = 8
-
-# Floor for tolerances of zero in the spatial index (relative; keeps its metric finite).
-_TINY = 1e-15
-
-
-class ContactError(InterlockError):
-    """Input that :func:`contacts` cannot work with (not an assembly, bad tolerances)."""
-
-
-@dataclass(frozen=True, eq=False)
-class Contact:
-    """One face-to-face contact polygon between blocks ``i < j`` (one row group of Def. 3.3).
-
-    Attributes
-    ----------
-    i, j : int
-        The blocks in contact, ``i < j``.
-    normal : array (3,)
-        Unit normal pointing from block ``i`` towards block ``j`` (block ``i``'s
-        outward facet normal).
-    vertices : array (k, 3)
-        The overlap polygon on block ``i``'s facet plane (with ``gap > 0``: on
-        the parallel plane halfway to block ``j``'s facet, see :func:`contacts`):
-        the exterior ring (counter-clockwise about ``normal``, no closing
-        repeat), then each hole ring.  Every vertex gives rows of the
-        interlocking matrix.
-    area : float
-        Area of the polygon.
-    facet_i, facet_j : int
-        Indices of the touching facets in :func:`facets` of each block.
-    polygon : shapely.Polygon
-        The polygon in 2D plane coordinates: ``origin + x * basis[0] + y * basis[1]``.
-    origin : array (3,)
-        A point of the plane (the centroid of block ``i``'s facet, moved halfway
-        to block ``j``'s facet when ``gap > 0``).
-    basis : array (2, 3)
-        Orthonormal in-plane vectors with ``basis[0] x basis[1] = normal``.
-    deviation : float
-        How far the blocks' real faces stray from the modelled common plane
-        over this contact: the flatness of either facet (:attr:`Facets.flatness`)
-        plus the largest distance of a contact vertex from block ``j``'s facet
-        plane (for a contact across a gap, its :attr:`separation`).  Zero up to
-        rounding for faces that really are coplanar.
-    planar : bool
-        Both facets are planar up to rounding (:attr:`Facets.planar`).  When
-        False, the tolerances merged triangles bent by a small angle into one
-        facet: the real contact has several planes, so it may block a sliding
-        motion that the modelled one allows.  A gap does not make a contact
-        non-planar: two parallel planar faces a gap apart block no sliding
-        either (see :func:`contacts`).
-    separation : float
-        The gap this contact bridges: zero for faces that touch (coplanar
-        within ``rtol``, and always when ``gap = 0``); for a contact found only
-        thanks to ``gap > 0``, the largest distance from block ``j``'s facet
-        plane of the overlap's vertices on block ``i``'s facet plane (at most
-        ``(rtol + gap) * scale``; also part of :attr:`deviation`).
-    """
-
-    i: int
-    j: int
-    normal: np.ndarray
-    vertices: np.ndarray
-    area: float
-    facet_i: int
-    facet_j: int
-    polygon: shapely.Polygon = field(repr=False)
-    origin: np.ndarray = field(repr=False)
-    basis: np.ndarray = field(repr=False)
-    deviation: float = 0.0
-    planar: bool = True
-    separation: float = 0.0
-
-    @classmethod
-    def at_points(cls, i: int, j: int, normal, points) -> Contact:
-        """A point or line contact given by hand: block ``j``'s points ``points`` on block ``i``'s face.
-
-        :func:`contacts` finds face-to-face contacts only (Remark 3.11); a
-        corner or an edge of block ``j`` resting on a face of block ``i``
-        (outward unit ``normal``, towards ``j``) gives one row of the
-        interlocking matrix per point, and the gap function of
-        :mod:`interlock.verify.second_order` (an n-pod leg, ``docs/npod.md``).
-
-        >>> c = Contact.at_points(0, 1, [0, 0, 1], [[0, 0, 0], [1, 0, 0]])
-        >>> len(c.vertices), c.area
-        (2, 0.0)
-        """
-        if not (isinstance(i, (int, np.integer)) and isinstance(j, (int, np.integer)) and 0 <= i < j):
-            raise ContactError(f"a contact needs block indices 0 <= i < j, got {i!r}, {j!r}")
-        n = np.asarray(normal, dtype=float).reshape(-1)
-        vertices = np.asarray(points, dtype=float).reshape(-1, 3) if np.size(points) else np.zeros((0, 3))
-        if n.shape != (3,) or not np.isfinite(n).all() or not np.linalg.norm(n) > 0:
-            raise ContactError(f"normal must be a non-zero finite 3D vector, got {normal!r}")
-        if not len(vertices) or not np.isfinite(vertices).all():
-            raise ContactError("points must be one or more finite 3D points, shape (k, 3)")
-        n = n / np.linalg.norm(n)
-        basis = _bases(n[None])[0]
-        origin = vertices.mean(axis=0)
-        for array in (n, vertices, origin, basis):
-            array.setflags(write=False)
-        return cls(int(i), int(j), n, vertices, 0.0, -1, -1, shapely.Polygon(), origin, basis)
-
-    @property
-    def ring_sizes(self) -> tuple[int, ...]:
-        """Vertex counts of the exterior ring and of each hole, in the order of :attr:`vertices`."""
-        if self.polygon.is_empty:  # a point or line contact (:meth:`at_points`)
-            return (len(self.vertices),)
-        rings = [self.polygon.exterior, *self.polygon.interiors]
-        return tuple(len(ring.coords) - 1 for ring in rings)
-
-    def __str__(self) -> str:
-        n = ", ".join(f"{x:.3g}" for x in self.normal)
-        holes = len(self.ring_sizes) - 1
-        extra = f" with {holes} hole(s)" if holes else ""
-        bent = "" if self.planar else f", faces bent by up to {self.deviation:.3g} (planar only within tolerance)"
-        apart = f", across a gap of up to {self.separation:.3g}" if self.separation else ""
-        return (f"contact {self.i}-{self.j}: {len(self.vertices)} vertices{extra}, area {self.area:.6g}, "
-                f"normal ({n}), facets {self.facet_i}/{self.facet_j}{bent}{apart}")
-
-    def to_dict(self) -> dict:
-        """JSON-serialisable form; ``ring_sizes`` splits ``vertices`` into exterior and holes."""
-        return {"i": self.i, "j": self.j, "normal": self.normal.tolist(), "vertices": self.vertices.tolist(),
-                "ring_sizes": list(self.ring_sizes), "area": self.area, "facet_i": self.facet_i,
-                "facet_j": self.facet_j, "origin": self.origin.tolist(), "basis": self.basis.tolist(),
-                "deviation": self.deviation, "planar": self.planar, "separation": self.separation}
-
-
-@dataclass(frozen=True, eq=False)
-class Facets:
-    """The planar facets of a triangle mesh: maximal edge-connected sets of coplanar triangles.
-
-    Facet ``f`` is the polygon ``polygons[f]`` (2D, possibly non-convex, with
-    holes) placed by ``origins[f] + x * bases[f, 0] + y * bases[f, 1]``; its
-    outward normal is ``normals[f] = bases[f, 0] x bases[f, 1]``; ``faces[f]``
-    lists its triangles.  Facets are ordered by their lowest triangle index.
-    ``flatness[f]`` is the largest distance of a vertex of its triangles from
-    its plane, and ``planar[f]`` says whether that is rounding only
-    (:data:`PLANAR_ULPS`) rather than a bend the tolerances accepted.
-    """
-
-    normals: np.ndarray
-    origins: np.ndarray
-    bases: np.ndarray
-    polygons: np.ndarray
-    faces: tuple[np.ndarray, ...]
-    flatness: np.ndarray
-    planar: np.ndarray
-
-    def __len__(self) -> int:
-        return len(self.normals)
-
-    @property
-    def areas(self) -> np.ndarray:
-        return shapely.area(self.polygons)
 
 
 def contacts(assembly: Assembly, rtol: float = DEFAULT_CONTACT_RTOL, angle_tol: float = DEFAULT_ANGLE_TOL,
@@ -312,6 +142,7 @@ def contacts(assembly: Assembly, rtol: float = DEFAULT_CONTACT_RTOL, angle_tol: 
 
     Examples
     --------
+    >>> import trimesh
     >>> cubes = [trimesh.creation.box(bounds=[[x, 0, 0], [x + 1, 1, 1]]) for x in range(3)]
     >>> found = contacts(Assembly.from_meshes(cubes))
     >>> [(c.i, c.j, round(c.area, 9), c.normal.round(9).tolist()) for c in found]
@@ -322,10 +153,10 @@ def contacts(assembly: Assembly, rtol: float = DEFAULT_CONTACT_RTOL, angle_tol: 
     if not isinstance(assembly, Assembly):
         raise ContactError(f"contacts() needs an interlock Assembly, got {type(assembly).__name__}; "
                            "build one with Assembly.from_meshes or Assembly.load")
-    rtol = _tolerance("rtol", rtol)
-    angle_tol = _tolerance("angle_tol", angle_tol)
-    area_rtol = _tolerance("area_rtol", area_rtol)
-    gap = _tolerance("gap", gap)
+    rtol = check_tolerance("rtol", rtol)
+    angle_tol = check_tolerance("angle_tol", angle_tol)
+    area_rtol = check_tolerance("area_rtol", area_rtol)
+    gap = check_tolerance("gap", gap)
     if angle_tol >= math.pi / 2:
         raise ContactError(f"angle_tol must be below pi/2 radians, got {angle_tol}")
     if len(assembly) < 2:
@@ -357,7 +188,7 @@ def contacts(assembly: Assembly, rtol: float = DEFAULT_CONTACT_RTOL, angle_tol: 
 
 def _pair_contacts(assembly, pairs, scale, rtol, angle_tol, area_rtol, gap=0.0) -> tuple[Contact, ...]:
     """Contacts of the given block pairs, tolerances relative to ``scale``."""
-    table = _FacetTable(assembly, rtol * scale, angle_tol)
+    table = FacetTable(assembly, rtol * scale, angle_tol)
     gi, gj = _matches(table, pairs, (rtol + gap) * scale, angle_tol, scale, tilted=gap > 0)
     grid = 2.0 ** math.floor(math.log2(OVERLAY_GRID_RTOL * scale))  # a power of two keeps dyadic coordinates exact
     return _overlaps(table, gi, gj, rtol * scale, area_rtol * scale**2, grid, gap * scale)
@@ -381,234 +212,10 @@ def _moved(contact: Contact, i: int, j: int, transform: np.ndarray, mirrored: bo
     return replace(contact, i=i, j=j, normal=normal, vertices=vertices, origin=origin, basis=basis, polygon=polygon)
 
 
-def facets(mesh: trimesh.Trimesh, atol: float | None = None, angle_tol: float = DEFAULT_ANGLE_TOL) -> Facets:
-    """The planar facets of a triangle mesh (polygonal faces that a file format triangulated).
-
-    Adjacent triangles (sharing an edge, after merging duplicate vertices)
-    belong to one facet when their normals agree within ``angle_tol`` or the
-    smaller one's far vertex lies within ``atol`` of the larger one's plane; a
-    group that is not flat within ``atol`` (a finely tessellated curved
-    surface) falls apart into its triangles.  A triangle in no group is a facet
-    of its own.  Degenerate triangles are left out.
-
-    Parameters
-    ----------
-    mesh : trimesh.Trimesh
-        An outward-oriented triangle mesh.
-    atol : float, optional
-        Distance tolerance; default ``DEFAULT_CONTACT_RTOL * mesh.scale``.
-    angle_tol : float, optional
-        Angle tolerance in radians.
-
-    Returns
-    -------
-    Facets
-
-    Examples
-    --------
-    >>> f = facets(trimesh.creation.box())
-    >>> len(f), f.areas.round(12).tolist()
-    (6, [1.0, 1.0, 1.0, 1.0, 1.0, 1.0])
-    """
-    if not isinstance(mesh, trimesh.Trimesh):
-        raise ContactError(f"facets() needs a trimesh.Trimesh, got {type(mesh).__name__}")
-    mesh = mesh.copy()
-    mesh.merge_vertices(merge_tex=True, merge_norm=True)
-    atol = DEFAULT_CONTACT_RTOL * mesh.scale if atol is None else _tolerance("atol", atol)
-    return _facets(mesh, atol, _tolerance("angle_tol", angle_tol))
+# --- private helpers --------------------------------------------------------------------------------
 
 
-# --- private helpers ----------------------------------------------------------------------------
-
-
-def _tolerance(name, value) -> float:
-    if isinstance(value, bool) or not isinstance(value, Real) or not math.isfinite(value) or value < 0:
-        raise ContactError(f"{name} must be a finite number >= 0, got {value!r}")
-    return float(value)
-
-
-def _facets(mesh: trimesh.Trimesh, atol: float, angle_tol: float) -> Facets:
-    tri = mesh.triangles
-    cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-    twice_area = np.linalg.norm(cross, axis=1)
-    good = twice_area > np.finfo(float).eps * max(mesh.scale, _TINY) ** 2
-    normal = np.zeros_like(cross)
-    normal[good] = cross[good] / twice_area[good, None]
-
-    # coplanar neighbours: normals agree, or the smaller face's far vertex is on the larger's plane
-    adj = mesh.face_adjacency
-    adj = adj[good[adj].all(axis=1)] if len(adj) else adj.reshape(0, 2)
-    keep = np.zeros(len(adj), dtype=bool)
-    if len(adj):
-        a, b = adj[:, 0], adj[:, 1]
-        angle = 2 * np.arcsin(np.clip(np.linalg.norm(normal[a] - normal[b], axis=1) / 2, 0, 1))
-        big_first = twice_area[a] >= twice_area[b]
-        big, small = np.where(big_first, a, b), np.where(big_first, b, a)
-        unshared = _unshared_vertex(mesh.faces[small], mesh.faces[big])
-        far = np.abs(np.einsum("ij,ij->i", normal[big], mesh.vertices[unshared] - tri[big, 0]))
-        same_side = np.einsum("ij,ij->i", normal[a], normal[b]) > 0
-        keep = same_side & ((angle <= angle_tol) | (far <= atol))
-    n_faces = len(mesh.faces)
-    graph = coo_matrix((np.ones(keep.sum()), (adj[keep, 0], adj[keep, 1])), shape=(n_faces, n_faces))
-    _, label = connected_components(graph, directed=False)
-
-    # groups that are not flat fall apart into single triangles
-    _, label = np.unique(label, return_inverse=True)
-    nrm, org = _planes(label, cross, tri, good)
-    dist = np.abs(np.einsum("fvi,fi->fv", tri - org[label][:, None], nrm[label])).max(axis=1)
-    bent = np.zeros(label.max() + 1, dtype=bool)
-    np.logical_or.at(bent, label[good], dist[good] > atol)
-    split = bent[label]
-    label = np.where(split, label.max() + 1 + np.arange(n_faces), label)
-    label[~good] = -1
-    # number facets by their lowest triangle index
-    used = np.flatnonzero(good)
-    _, first, label_g = np.unique(label[used], return_index=True, return_inverse=True)
-    order = np.argsort(np.argsort(used[first], kind="stable"), kind="stable")
-    label = np.full(n_faces, -1)
-    label[used] = order[label_g]
-    n_facets = len(first)
-    if n_facets == 0:
-        raise ContactError("the mesh has no triangle of positive area")
-    nrm, org = _planes(label[used], cross[used], tri[used], np.ones(len(used), dtype=bool))
-    bases = _bases(nrm)
-
-    # facet outlines: union of the projected triangles
-    lab = label[used]
-    flat = np.einsum("fvi,fai->fva", tri[used] - org[lab][:, None], bases[lab])
-    triangles = shapely.polygons(flat)
-    members = np.argsort(lab, kind="stable")
-    groups = np.split(members, np.cumsum(np.bincount(lab, minlength=n_facets))[:-1])
-    polygons = np.empty(n_facets, dtype=object)
-    for f, group in enumerate(groups):
-        polygons[f] = triangles[group[0]] if len(group) == 1 else shapely.union_all(triangles[group])
-    polygons = _clean(polygons, atol)
-    # how far the grouped triangles really are from their common plane: rounding, or a bend within tolerance
-    offsets = np.abs(np.einsum("fvi,fi->fv", tri[used] - org[lab][:, None], nrm[lab])).max(axis=1)
-    flatness = np.zeros(n_facets)
-    np.maximum.at(flatness, lab, offsets)
-    magnitude = float(np.abs(mesh.vertices).max(initial=0.0)) or 1.0
-    planar = flatness <= PLANAR_ULPS * np.finfo(float).eps * magnitude
-    for array in (nrm, org, bases, polygons, flatness, planar):
-        array.setflags(write=False)
-    return Facets(nrm, org, bases, polygons, tuple(used[g] for g in groups), flatness, planar)
-
-
-def _unshared_vertex(faces_small, faces_big):
-    """For each pair of adjacent faces, the vertex of the first not in the second."""
-    not_shared = ~(faces_small[:, :, None] == faces_big[:, None, :]).any(axis=2)
-    return faces_small[np.arange(len(faces_small)), not_shared.argmax(axis=1)]
-
-
-def _planes(label, cross, tri, good):
-    """Area-weighted unit normal and centroid per label."""
-    count = label.max() + 1
-    w = np.where(good, np.linalg.norm(cross, axis=1), 0.0)
-    nrm = np.stack([np.bincount(label, cross[:, k] * good, count) for k in range(3)], axis=1)
-    centres = tri.mean(axis=1)
-    total = np.bincount(label, w, count)
-    org = np.stack([np.bincount(label, centres[:, k] * w, count) for k in range(3)], axis=1)
-    org /= np.where(total > 0, total, 1.0)[:, None]
-    length = np.linalg.norm(nrm, axis=1)
-    nrm /= np.where(length > 0, length, 1.0)[:, None]
-    return nrm, org
-
-
-def _bases(normals):
-    """Orthonormal (u, v) per unit normal n with u x v = n."""
-    axis = np.eye(3)[np.argmin(np.abs(normals), axis=1)]
-    u = np.cross(normals, axis)
-    u /= np.linalg.norm(u, axis=1)[:, None]
-    return np.stack([u, np.cross(normals, u)], axis=1)
-
-
-def _clean(polygons, atol):
-    """Drop near-duplicate and near-collinear vertices anywhere in each ring; exteriors counter-clockwise.
-
-    A vertex closer than ``atol`` to the segment joining its two neighbours is
-    removed, repeatedly, for all rings at once (each pass removes, in every
-    run of such vertices, those nearest to their neighbours' segment, then
-    re-checks).  Douglas-Peucker
-    simplification would keep each ring's start point, so a duplicate there
-    would survive and add a redundant row to the interlocking matrix.
-    """
-    polygons = np.atleast_1d(polygons)
-    rings, polygon_of = shapely.get_rings(polygons, return_index=True)
-    coords, ring_of = shapely.get_coordinates(rings, return_index=True)
-    if not len(coords):
-        return np.array([shapely.Polygon()] * len(polygons), dtype=object)
-    closing = np.r_[ring_of[1:] != ring_of[:-1], True]
-    coords, ring_of = coords[~closing], ring_of[~closing]
-    while len(coords):
-        first = np.r_[0, np.flatnonzero(np.diff(ring_of)) + 1]
-        length = np.diff(np.r_[first, len(coords)])
-        first, length = np.repeat(first, length), np.repeat(length, length)
-        position = np.arange(len(coords)) - first
-        prev, nxt = first + (position - 1) % length, first + (position + 1) % length
-        a, ac = coords[prev], coords[nxt] - coords[prev]
-        squared = np.einsum("ij,ij->i", ac, ac)
-        t = np.clip(np.einsum("ij,ij->i", coords - a, ac) / np.where(squared > 0, squared, 1.0), 0.0, 1.0)
-        distance = np.hypot(*(coords - a - t[:, None] * ac).T)
-        near = (distance <= atol) & (length > 3)
-        # in a run of removable vertices remove the most collinear first (a corner beside a spurious
-        # vertex from nearly parallel edges is farther from its neighbours' segment than the spurious one)
-        remove = near & ~(near[prev] & (distance[prev] < distance)) & ~(near[nxt] & (distance[nxt] <= distance))
-        if not remove.any():
-            break
-        coords, ring_of = coords[~remove], ring_of[~remove]
-    counts = np.bincount(ring_of, minlength=len(rings))
-    bounds = np.r_[0, np.cumsum(counts)]
-    first_ring = np.r_[0, np.cumsum(np.bincount(polygon_of, minlength=len(polygons)))]  # rings come per polygon
-    out = np.empty(len(polygons), dtype=object)
-    for p in range(len(polygons)):
-        members = range(first_ring[p], first_ring[p + 1])
-        valid = [coords[bounds[k]:bounds[k + 1]] for k in members if counts[k] >= 3]
-        exterior_ok = len(members) > 0 and counts[members[0]] >= 3
-        out[p] = shapely.Polygon(valid[0], valid[1:]) if exterior_ok else shapely.Polygon()
-    return shapely.orient_polygons(shapely.normalize(out))
-
-
-class _FacetTable:
-    """The facets of every block in world coordinates, concatenated block after block."""
-
-    def __init__(self, assembly: Assembly, atol: float, angle_tol: float):
-        types = assembly.types
-        per_type = {}
-        for t in np.unique(types):
-            mesh = assembly.meshes[t].copy()
-            mesh.merge_vertices(merge_tex=True, merge_norm=True)
-            per_type[t] = _facets(mesh, atol, angle_tol)
-        counts = np.array([len(per_type[t]) for t in types])
-        self.start = np.concatenate([[0], np.cumsum(counts)])
-        total = self.start[-1]
-        self.block = np.repeat(np.arange(len(types)), counts)
-        self.local = np.arange(total) - self.start[self.block]
-        self.normals, self.origins = np.empty((total, 3)), np.empty((total, 3))
-        self.bases, self.polygons = np.empty((total, 2, 3)), np.empty(total, dtype=object)
-        self.flatness, self.planar = np.empty(total), np.empty(total, dtype=bool)
-        rot, shift = assembly.transforms[:, :3, :3], assembly.transforms[:, :3, 3]
-        mirrored = assembly.mirrored
-        for t, f in per_type.items():
-            for mirror in (False, True):
-                blocks = np.flatnonzero((types == t) & (mirrored == mirror))
-                if not len(blocks):
-                    continue
-                rows = (self.start[blocks][:, None] + np.arange(len(f))).ravel()
-                r = rot[blocks]
-                self.normals[rows] = np.einsum("bij,fj->bfi", r, f.normals).reshape(-1, 3)
-                self.origins[rows] = (np.einsum("bij,fj->bfi", r, f.origins) + shift[blocks, None]).reshape(-1, 3)
-                bases = np.einsum("bij,fkj->bfki", r, f.bases).reshape(-1, 2, 3)
-                polygons = f.polygons
-                if mirror:  # keep u x v = n: flip v, and y in the plane
-                    bases[:, 1] *= -1
-                    polygons = _clean(shapely.transform(polygons, lambda xy: xy * [1.0, -1.0]), 0.0)
-                self.bases[rows] = bases
-                self.polygons[rows] = np.tile(polygons, len(blocks))
-                self.flatness[rows] = np.tile(f.flatness, len(blocks))
-                self.planar[rows] = np.tile(f.planar, len(blocks))
-
-
-def _matches(table: _FacetTable, pairs, atol, angle_tol, scale, tilted=False):
+def _matches(table: FacetTable, pairs, atol, angle_tol, scale, tilted=False):
     """Global facet indices (gi, gj) of coplanar facets with opposite normals, blocks i < j.
 
     ``tilted``: the centroid of each facet may be farther from the other's plane than ``atol`` by what a tilt
@@ -618,8 +225,8 @@ def _matches(table: _FacetTable, pairs, atol, angle_tol, scale, tilted=False):
     centre = (lo + hi) / 2
     reach = max(scale, float(np.linalg.norm(hi - lo)))
     # |n_i + n_j| <= angle_tol and |d_i + d_j| <= atol + angle_tol * reach / 2 for offsets d = n.(o - centre)
-    a = max(angle_tol, _TINY)
-    t = max(atol + angle_tol * reach, _TINY * scale)
+    a = max(angle_tol, TINY)
+    t = max(atol + angle_tol * reach, TINY * scale)
     offset = np.einsum("fi,fi->f", table.normals, table.origins - centre)
     points = np.hstack([table.normals / a, offset[:, None] / t])
     radius = math.sqrt(2) * (1 + 1e-9)
@@ -649,7 +256,7 @@ def _matches(table: _FacetTable, pairs, atol, angle_tol, scale, tilted=False):
     return gi[ok], gj[ok]
 
 
-def _overlaps(table: _FacetTable, gi, gj, atol, area_tol, grid, gap=0.0) -> tuple[Contact, ...]:
+def _overlaps(table: FacetTable, gi, gj, atol, area_tol, grid, gap=0.0) -> tuple[Contact, ...]:
     """Intersect matched facets in block i's facet frame; one Contact per overlap part.
 
     With ``gap > 0`` (absolute), parts farther than ``atol + gap`` from block j's facet plane are dropped and
@@ -671,7 +278,7 @@ def _overlaps(table: _FacetTable, gi, gj, atol, area_tol, grid, gap=0.0) -> tupl
     overlap = shapely.intersection(table.polygons[gi], moved, grid_size=grid)
     parts, k = shapely.get_parts(overlap, return_index=True)
     polygonal = shapely.get_type_id(parts) == 3
-    parts, k = _clean(parts[polygonal], atol), k[polygonal]
+    parts, k = clean_polygons(parts[polygonal], atol), k[polygonal]
     polygonal = shapely.get_type_id(parts) == 3  # simplification may collapse slivers
     parts, k = parts[polygonal], k[polygonal]
     area, perimeter = shapely.area(parts), shapely.length(parts)
@@ -717,3 +324,4 @@ def _overlaps(table: _FacetTable, gi, gj, atol, area_tol, grid, gap=0.0) -> tupl
                              int(facet_i[p]), int(facet_j[p]), parts[p], origin, basis, deviation,
                              bool(table.planar[g_i] and table.planar[g_j]), separation))
     return tuple(found)
+

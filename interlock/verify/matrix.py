@@ -77,7 +77,7 @@ def interlocking_matrix(assembly: Assembly, frame=None, translational: bool = Fa
 
     with ``r_k = (p - c_k) / L``: twists are about each block's centroid
     ``c_k`` and lengths are divided by the model size ``L``, which changes no
-    verdict but conditions the matrix (DESIGN.md).  ``A x >= 0`` says no
+    verdict but conditions the matrix (docs/interlocking.md).  ``A x >= 0`` says no
     contact vertex moves into the other block.  Frame columns are dropped and
     identical rows merged (the reduced matrix of Def. 3.3).  Translational:
     rows ``(-n)`` / ``(n)``, one per contact.

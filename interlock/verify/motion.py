@@ -5,18 +5,17 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Callable
 
 import numpy as np
 
+from interlock import deprecation
 from interlock.blocks.assembly import Assembly, AssemblyError
 from interlock.errors import InterlockError
-from interlock.verify.validate import _solid
+from interlock.verify.collisions import IDENTITY_RTOL, MotionOverlaps, transform_offset
 
-__all__ = ["FiniteMotion", "Collision", "MotionError", "finite_motion", "moved", "twist_exponential", "export_motion",
-           "OVERLAP_RTOL", "REACH_RTOL", "STEPS", "SMALL_STEPS", "SEPARATION_RTOL", "IDENTITY_RTOL", "SCAN_POINTS",
-           "FRAME_FORMATS"]
+__all__ = ["FiniteMotion", "Collision", "MotionError", "finite_motion", "moved", "twist_exponential",
+           "OVERLAP_RTOL", "REACH_RTOL", "STEPS", "SMALL_STEPS", "SEPARATION_RTOL", "IDENTITY_RTOL", "SCAN_POINTS"]
 
 #: A step collides when two blocks overlap in more than this fraction of the smaller block's volume.  The
 #: contacts' own tolerances are ~1e-5 of the model size, so faces that are planar only within them may overlap
@@ -33,13 +32,8 @@ SMALL_STEPS = (1e-4, 1e-3, 1e-2)
 #: Moving blocks are separated from a fixed block when their distance exceeds this fraction of the model size
 #: (the tolerance of :attr:`Assembly.neighbours <interlock.blocks.Assembly.neighbours>`).
 SEPARATION_RTOL = 1e-6
-#: A path's transform is the identity (a block does not move) when it differs from it by at most this (linear
-#: part; translations relative to the model size); the check for rigid transforms uses the same tolerance.
-IDENTITY_RTOL = 1e-9
 #: Points of the parameter range scanned to find where the motion reaches its reach.
 SCAN_POINTS = 256
-#: What :func:`export_motion` writes: the mesh formats of :func:`interlock.gallery.export`, and PNG pictures.
-FRAME_FORMATS = ("stl", "obj", "ply", "glb", "3mf", "vtu", "xdmf", "png")
 
 
 class MotionError(InterlockError):
@@ -304,7 +298,7 @@ def finite_motion(assembly: Assembly, motion, *, frame=None, span=None, overlap_
     parameters = sorted(set(parameters) | {path.start + k / steps * (end - path.start) for k in range(1, steps + 1)})
     parameters = [s for s in parameters if path.start < s <= end]
 
-    measure = _Overlaps(assembly, moving, gap)
+    measure = MotionOverlaps(assembly, moving, gap)
     rows, collision, separated = [], None, False
     for k, s in enumerate(parameters):
         T = path(s)
@@ -329,55 +323,6 @@ def finite_motion(assembly: Assembly, motion, *, frame=None, span=None, overlap_
                         path.twists, assembly, path)
 
 
-def export_motion(assembly: Assembly, result: FiniteMotion, folder, frames: int = 8, format: str = "stl") -> list[Path]:
-    """Write the assembly at ``frames`` evenly spaced parameters of a :class:`FiniteMotion`, one file per frame.
-
-    ``assembly`` is the one the motion was found for (the result's own, or
-    one with the same blocks, such as a re-loaded copy).
-    Frames run from the start of the motion to its last measured step (the
-    collision, when there was one).  Mesh formats go through
-    :func:`interlock.gallery.export` (one file holding every block, which
-    loads back block by block; colours where the format has them), ``"png"``
-    through :func:`interlock.gallery.render` (needs matplotlib:
-    ``pip install "interlock[plot]"``, else a :class:`~interlock.errors.GalleryError`).
-    Files are ``frame_000.<format>``, ...; the folder is created.
-
-    Examples
-    --------
-    >>> import tempfile, trimesh
-    >>> cubes = Assembly.from_meshes([trimesh.creation.box(bounds=[[x, 0, 0], [x + 1, 1, 1]]) for x in range(2)])
-    >>> result = finite_motion(cubes, [[0, 0, 0, 0, 0, 0], [0, 0, 0, 1, 0, 0]], frame=[0])
-    >>> with tempfile.TemporaryDirectory() as folder:
-    ...     paths = export_motion(cubes, result, folder, frames=3)
-    ...     [p.name for p in paths], len(Assembly.load(paths[-1]))
-    (['frame_000.stl', 'frame_001.stl', 'frame_002.stl'], 2)
-    """
-    if not isinstance(result, FiniteMotion) or result.path is None:
-        raise MotionError(f"export_motion needs the FiniteMotion of finite_motion, got {type(result).__name__}")
-    if not isinstance(assembly, Assembly) or len(assembly) != len(result.path(result.start)):
-        got = f"{len(assembly)} blocks" if isinstance(assembly, Assembly) else type(assembly).__name__
-        raise MotionError(f"export_motion needs the Assembly of the motion ({len(result.path(result.start))} blocks), "
-                          f"got {got}")
-    frames = _count(frames, "frames")
-    kind = str(format).lower().lstrip(".")
-    if kind not in FRAME_FORMATS:
-        raise MotionError(f"unknown frame format {format!r}; choose one of {', '.join(FRAME_FORMATS)}")
-    from interlock.gallery import export, render  # the gallery verifies assemblies: import it only here
-
-    folder = Path(folder)
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-    except OSError as error:
-        raise MotionError(f"cannot create the folder {folder}: {error.strerror or error}") from None
-    last = result.parameters[-1] if result.parameters else result.start
-    written = []
-    for k, s in enumerate(np.linspace(result.start, last, frames) if frames > 1 else [last]):
-        target = folder / f"frame_{k:03d}.{kind}"
-        at = moved(assembly, result.path, float(s))
-        written.append(render(at, target, title=f"s = {s:.4g}") if kind == "png" else export(at, target))
-    return written
-
-
 # --- motions -------------------------------------------------------------------------
 
 
@@ -400,7 +345,7 @@ def _path(assembly: Assembly, motion, fixed, span, reach=None, check_start=True)
         path = _Path(lambda s: _checked_transforms(motion(s), s, n, fixed, assembly.scale), start, stop, "path")
         if not check_start:
             return path
-        off = _offset(path(start), assembly.scale)
+        off = transform_offset(path(start), assembly.scale)
         if off.max() > IDENTITY_RTOL:
             block = int(np.argmax(off))
             raise MotionError(f"the path must start at the identity (the assembly as given), but at s = {start:g} "
@@ -447,7 +392,7 @@ def _checked_transforms(value, s, n, fixed, size) -> np.ndarray:
     if bad.any():
         raise MotionError(f"the path's transform of block {int(np.flatnonzero(bad)[0])} at s = {s:g} is not a rigid "
                           "motion (a rotation with determinant +1 and a translation, last row 0 0 0 1)")
-    off = _offset(T, size)
+    off = transform_offset(T, size)
     moved_frame = [b for b in fixed if off[b] > IDENTITY_RTOL]
     if moved_frame:
         raise MotionError(f"the path moves frame block(s) {', '.join(map(str, moved_frame[:8]))} at s = {s:g}; "
@@ -459,13 +404,8 @@ def _moving(path, grid, size) -> tuple[int, ...]:
     """The blocks a twist moves (nonzero rows), or that a path moves away from the identity somewhere on ``grid``."""
     if path.twists is not None:
         return tuple(int(b) for b in np.flatnonzero(np.any(path.twists != 0, axis=1)))
-    off = np.max([_offset(path(s), size) for s in grid], axis=0)
+    off = np.max([transform_offset(path(s), size) for s in grid], axis=0)
     return tuple(int(b) for b in np.flatnonzero(off > IDENTITY_RTOL))
-
-
-def _offset(T, size) -> np.ndarray:
-    """How far each transform is from the identity: largest entry of ``T - I``, translations over ``size``."""
-    return (np.abs(T - np.eye(4)) / np.array([1, 1, 1, size])).max(axis=(-2, -1))
 
 
 def _points(assembly: Assembly, blocks) -> tuple[np.ndarray, np.ndarray]:
@@ -507,72 +447,6 @@ def _crossing(grid, scanned, target, displacement) -> float:
             break
         lo, hi = (mid, hi) if displacement(mid) < target else (lo, mid)
     return hi
-
-
-# --- overlaps ------------------------------------------------------------------------
-
-
-class _Overlaps:
-    """Overlap volumes of moving blocks with every block whose bounding box they meet, one step at a time."""
-
-    def __init__(self, assembly: Assembly, moving, gap: float):
-        import manifold3d
-
-        self.manifold3d, self.assembly, self.gap = manifold3d, assembly, gap
-        self.moving = np.asarray(moving, dtype=int)
-        self.shapes, self.fixed_solids = {}, {}
-        self.booleans = 0
-
-    def _shape(self, t):
-        if t not in self.shapes:
-            self.shapes[t] = _solid(self.manifold3d, self.assembly.meshes[t], t)
-        return self.shapes[t]
-
-    def _placed(self, b, T):
-        return self._shape(int(self.assembly.types[b])).transform(T[:3, :])
-
-    def __call__(self, M):
-        """(volume, fraction, pair) of the worst overlap and whether the moving blocks are apart from the rest."""
-        a = self.assembly
-        transforms = M @ a.transforms
-        bounds = a.bounds.copy()
-        for b in self.moving:
-            mesh = a.meshes[a.types[b]]
-            world = mesh.vertices @ transforms[b, :3, :3].T + transforms[b, :3, 3]
-            bounds[b] = world.min(axis=0), world.max(axis=0)
-        moving, still = self.moving, np.ones(len(a), dtype=bool)
-        still[moving] = False
-        lo, hi = bounds[:, 0], bounds[:, 1]
-        meets = np.all((lo[moving, None] <= hi[None] + self.gap) & (lo[None] <= hi[moving, None] + self.gap), axis=2)
-        meets[np.arange(len(moving)), moving] = False
-        worst, apart = (0.0, 0.0, None), bool(still.any())  # with nothing at rest there is nothing to leave
-        done, solids = set(), {}
-        for r, j in zip(*np.nonzero(meets)):
-            i, j = int(moving[r]), int(j)
-            together = not still[j] and _offset(M[i] - M[j] + np.eye(4), a.scale) <= IDENTITY_RTOL
-            if (min(i, j), max(i, j)) in done or together:
-                continue  # counted already, or two blocks moved as one: their overlap is that of the assembly given
-            done.add((min(i, j), max(i, j)))
-            for b in (i, j):
-                if b not in solids:
-                    solids[b] = self._placed(b, transforms[b]) if not still[b] else self._fixed(b)
-            self.booleans += 1
-            volume = max(float((solids[i] ^ solids[j]).volume()), 0.0)
-            fraction = volume / min(a.volumes[i], a.volumes[j])
-            if fraction > worst[1] or worst[2] is None:
-                worst = (volume, fraction, (i, j))
-            if still[j] and apart:
-                apart = self._gap(solids[i], solids[j]) > self.gap
-        return worst[0], worst[1], worst[2], apart
-
-    def _fixed(self, b):
-        if b not in self.fixed_solids:
-            self.fixed_solids[b] = self._placed(b, self.assembly.transforms[b])
-        return self.fixed_solids[b]
-
-    def _gap(self, one, other) -> float:
-        min_gap = getattr(one, "min_gap", None)  # manifold3d >= 3
-        return float(min_gap(other, 2 * self.gap)) if min_gap is not None and self.gap > 0 else 0.0
 
 
 # --- arguments and messages --------------------------------------------------------------
@@ -631,3 +505,7 @@ def _message(shown, moving, collision, displacements, volumes, fractions, ending
                f"overlap at most {max(volumes):.3g} = {max(fractions):.2g} of the smaller block's volume")
     return (f"{names} move{'s' if len(moving) == 1 else ''} {displacements[-1]:.3g} (model size {size:.3g}) along the "
             f"motion, {how}, with {overlap} (tolerance {rtol:g} of the smaller block's volume) in {count} steps")
+
+
+# Deprecated: pictures of a motion are made in the gallery (interlock.gallery.motion); removed in interlock 0.3.
+__getattr__ = deprecation.moved(__name__, dict.fromkeys(("export_motion", "FRAME_FORMATS"), "interlock.gallery.motion"))

@@ -7,7 +7,8 @@ import numpy as np
 from interlock.blocks.assembly import Assembly
 from interlock.errors import InterlockError
 
-__all__ = ["OverlapError", "overlaps", "self_intersections", "validate", "OVERLAP_RTOL", "CROSSING_RTOL"]
+__all__ = ["manifold_solid", "OverlapError", "overlaps", "self_intersections", "validate", "OVERLAP_RTOL",
+           "CROSSING_RTOL"]
 
 #: Two blocks overlap when their common volume exceeds this fraction of the smaller one; it matches
 #: the contacts' angular tolerance (a face tilted by 1e-4 rad overlaps its neighbour in a wedge of ~1e-4 x volume).
@@ -35,7 +36,7 @@ def overlaps(assembly: Assembly, rtol: float = OVERLAP_RTOL) -> list[tuple[int, 
     """
     import manifold3d
 
-    solids = [_solid(manifold3d, mesh, k) for k, mesh in enumerate(assembly.meshes)]
+    solids = [manifold_solid(manifold3d, mesh, k) for k, mesh in enumerate(assembly.meshes)]
     pairs = np.array(sorted(assembly.neighbours.edges), dtype=int).reshape(-1, 2)
     first, kind_of, relative = assembly.pair_kinds(pairs)
     of_kind = []
@@ -127,7 +128,8 @@ def _edges_cross(edges_of, triangles, atol) -> np.ndarray:
     return out
 
 
-def _solid(manifold3d, mesh, k):
+def manifold_solid(manifold3d, mesh, k):
+    """``mesh`` (block ``k``) as a ``manifold3d.Manifold``; OverlapError when it is not a valid solid."""
     solid = manifold3d.Manifold(manifold3d.Mesh64(vert_properties=np.asarray(mesh.vertices, dtype=np.float64),
                                                   tri_verts=np.asarray(mesh.faces, dtype=np.uint64)))
     status = solid.status()

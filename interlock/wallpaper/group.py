@@ -231,7 +231,7 @@ class WallpaperGroup:
         """For each edge ``e`` of F: its partner edge and ``g_e`` with ``F ∩ g_e(F) ⊇ e``.
 
         ``g_e`` maps the partner edge onto ``e`` and the tile ``g_e(F)`` lies
-        across ``e`` (DESIGN.md, "Wallpaper construction"; main paper Sec. 4.1).
+        across ``e`` (docs/wallpaper.md; main paper Sec. 4.1).
         Computed exactly in lattice coordinates.
 
         >>> [(s.edge, s.partner, s.kind) for s in group("p4").side_pairings()]

@@ -9,7 +9,7 @@ from interlock import InterlockError
 from interlock.blocks import semicircular_arch
 from interlock.blocks.arch import ArchError
 from interlock.verify.contacts import contacts
-from interlock.verify.stability import critical_tilt, rbe
+from interlock.verify.statics import critical_tilt, rbe
 
 #: The paper's model: 36 voussoirs, t / r = 0.150 (Table 1, Remark 1).
 VOUSSOIRS, RATIO = 36, 0.15

@@ -49,8 +49,8 @@ def _stack(count=3):
     ("bridge", 16, (0, 1), 1e-12), ("cubes", 3, (0,), 1e-12), ("shelf", 11, (0,), 1e-6), ("snake", 4, (0,), 1e-12),
     ("concave-short", 2, (0,), 1e-12), ("cube-curve-short", 2, (0,), 1e-3),
     ("armadillo", 399, UPSTREAM_SUPPORTS["armadillo"], 1e-3)])
-def test_sample_files_blocks_volumes_and_upstream_supports(shared_data, stem, blocks, frame, rtol):
-    path = shared_data / "compas_cra" / f"{stem}.json"
+def test_sample_files_blocks_volumes_and_upstream_supports(reference_data, stem, blocks, frame, rtol):
+    path = reference_data / "compas_cra" / f"{stem}.json"
     assembly = load_compas(path)
     assert len(assembly) == blocks
     assert assembly.labels == tuple(range(blocks))
@@ -69,9 +69,9 @@ def test_is_support_marks_the_frame(tmp_path):
     assert a.frame == (0, 2) and a.info["supports_from"] == "file"
 
 
-def test_supports_argument_overrides_file_and_table(tmp_path, shared_data):
+def test_supports_argument_overrides_file_and_table(tmp_path, reference_data):
     assert load_compas(_write(tmp_path, _stack(), support=(0,)), supports=[1]).frame == (1,)
-    assert load_compas(shared_data / "compas_cra" / "type-a.json", supports=[2]).frame == (2,)
+    assert load_compas(reference_data / "compas_cra" / "type-a.json", supports=[2]).frame == (2,)
 
 
 def test_unmarked_unknown_file_has_no_frame(tmp_path):
@@ -114,7 +114,7 @@ def test_non_convex_polygon_faces_are_triangulated(tmp_path):
     assert load_compas(path).volumes[0] == pytest.approx(3.0)
 
 
-def test_assembly_load_dispatches_json(shared_data):
-    a = Assembly.load(shared_data / "compas_cra" / "cubes.json")
+def test_assembly_load_dispatches_json(reference_data):
+    a = Assembly.load(reference_data / "compas_cra" / "cubes.json")
     assert len(a) == 3 and a.frame == (0,) and a.info["format"] == "compas"
-    assert Assembly.load(shared_data / "compas_cra" / "cubes.json", frame=[2]).frame == (2,)
+    assert Assembly.load(reference_data / "compas_cra" / "cubes.json", frame=[2]).frame == (2,)

@@ -10,6 +10,7 @@ import shapely
 from scipy.stats import chisquare
 
 from interlock import InterlockError
+from interlock.blocks import lozenge, trilattice
 from interlock.blocks.lozenge import (
     DOWN,
     LATTICE_BASIS,
@@ -282,3 +283,9 @@ def test_only_hexagons_have_plane_partitions():
         LozengeTiling([(0, 0, 0), (5, 5, 1)]).to_plane_partition()
     with pytest.raises(TilingError, match="falls apart"):
         LozengeTiling([(0, 0, 0), (5, 5, 1)]).height_function()
+
+
+def test_lattice_names_are_exported_from_lozenge():
+    for name in ("LATTICE_BASIS", "UP", "DOWN", "UP_OFFSETS", "LOZENGE_CORNERS", "Lozenge", "TilingError",
+                 "hexagon_triangles"):
+        assert name in lozenge.__all__ and getattr(lozenge, name) is getattr(trilattice, name)

@@ -1,6 +1,8 @@
 """The paper's example assemblies: coordinates, counts, contacts and non-overlap (Ex. 3.5-3.7, Fig. 1, 4-7, 9-11)."""
 
 import math
+import subprocess
+import sys
 from collections import Counter
 
 import numpy as np
@@ -9,11 +11,13 @@ import shapely
 import trimesh
 
 from interlock import InterlockError, wallpaper
-from interlock.blocks import patch
+from interlock.blocks import patch, presets
+from interlock.blocks.contact import Contact
 from interlock.blocks.presets import (
     CUBE_VERTICES,
     TETRAHEDRA_SYMMETRIES,
     PresetError,
+    block_on_pins,
     cube_grid,
     cube_grid_cell,
     fig1_p6_block,
@@ -341,11 +345,33 @@ def test_fig_1_p6_block_deforms_every_edge_once():
     (lambda: modified_cube(size=-1), "size must be > 0"),
     (lambda: modified_cube_assembly(rows=0), "rows must be an integer >= 1"),
     (lambda: fig1_p6_block(height=0), "height must be > 0"),
+    (lambda: block_on_pins(h=0), "h must be > 0"),
+    (lambda: block_on_pins(h=1.0, c=0.5), "the valley must stay above the bottom face: h c > 1"),
 ])
 def test_bad_input_is_rejected_with_a_clear_message(call, words):
     with pytest.raises(PresetError, match=words.replace(".", r"\.").replace("(", r"\(")) as error:
         call()
     assert isinstance(error.value, InterlockError) and isinstance(error.value, ValueError)
+
+
+# --- the package ---------------------------------------------------------------------------------------
+
+
+def test_every_public_name_is_exported_from_the_package():
+    assert len(set(presets.__all__)) == len(presets.__all__)
+    for name in presets.__all__:
+        value = getattr(presets, name)
+        assert not isinstance(value, type(presets)), name  # a function, not a submodule of the same name
+        assert getattr(value, "__module__", "interlock.blocks.presets").startswith("interlock.blocks.presets"), name
+
+
+def test_block_on_pins_makes_block_contacts_without_importing_verify():
+    cup, pins = block_on_pins()
+    assert all(isinstance(c, Contact) for c in pins) and len(cup) == 8
+    code = ("import sys; from interlock.blocks import presets; presets.block_on_pins(); "
+            "print(sorted(m for m in sys.modules if m.startswith('interlock.verify')))")
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert run.stdout.strip() == "[]"  # blocks do not build on verify
 
 
 # --- helpers -------------------------------------------------------------------------------------------

@@ -71,8 +71,8 @@ def test_tetrahedra_framed_by_the_ring_alone_slide_only_to_first_order():
 
 
 @pytest.fixture(scope="module")
-def bunny(shared_data):
-    paths = [shared_data / "topolite" / "bunny" / f"part_{k}.obj" for k in range(1, BUNNY_PARTS + 1)]
+def bunny(reference_data):
+    paths = [reference_data / "topolite" / "bunny" / f"part_{k}.obj" for k in range(1, BUNNY_PARTS + 1)]
     assembly = Assembly.load(paths)
     return assembly, contacts(assembly)
 
@@ -91,8 +91,8 @@ def test_topolite_bunny_with_one_fixed_part_moves(bunny):
     assert 0 not in v.moving and len(v.moving) > 1
 
 
-def test_topolite_ania_moves(shared_data):
-    folder = shared_data / "topolite" / "ania"
+def test_topolite_ania_moves(reference_data):
+    folder = reference_data / "topolite" / "ania"
     order = ["piece4_tri", "piece0", "piece1", "piece3", "piece2"]
     assembly = Assembly.load([folder / f"{name}.obj" for name in order])
     v = check(assembly, frame=[1, 2, 3, 4])

@@ -259,10 +259,10 @@ def _pairs(found):
     return {(c.i, c.j) for c in found}
 
 
-def test_compas_cra_armadillo_with_upstream_gap(shared_data):
+def test_compas_cra_armadillo_with_upstream_gap(reference_data):
     from interlock.blocks import load_compas
 
-    a = load_compas(shared_data / "compas_cra" / "armadillo.json")
+    a = load_compas(reference_data / "compas_cra" / "armadillo.json")
     # upstream's absolute tmax = 0.05 and amin = 1e-4 relative to the model size; its faces pair up to 0.16 rad apart
     found = contacts(a, gap=0.05 / a.scale, area_rtol=1e-4 / a.scale**2, angle_tol=0.2)
     pairs = _pairs(found)
@@ -275,10 +275,10 @@ def test_compas_cra_armadillo_with_upstream_gap(shared_data):
 
 @pytest.mark.parametrize("name, area", [("cube-curve-short", 0.471), ("cube-curve-tall", 0.471),
                                         ("curve-3-blocks", None)])
-def test_compas_cra_curved_interfaces_as_small_planar_contacts(shared_data, name, area):
+def test_compas_cra_curved_interfaces_as_small_planar_contacts(reference_data, name, area):
     from interlock.blocks import load_compas
 
-    a = load_compas(shared_data / "compas_cra" / f"{name}.json")
+    a = load_compas(reference_data / "compas_cra" / f"{name}.json")
     default = contacts(a)
     found = contacts(a, gap=1e-3, angle_tol=0.2)  # facing triangles of the two sides differ in angle and offset
     assert len(found) >= max(4 * len(default), 250) and all(c.planar for c in found)
@@ -366,8 +366,8 @@ def _contact_graph(assembly, found):
     return graph
 
 
-def test_topolite_bunny(shared_data):
-    folder = shared_data / "topolite" / "bunny"
+def test_topolite_bunny(reference_data):
+    folder = reference_data / "topolite" / "bunny"
     paths = sorted(folder.glob("part_*.obj"), key=lambda p: int(p.stem.split("_")[1]))
     assert [p.name for p in paths[:3]] == ["part_1.obj", "part_2.obj", "part_3.obj"] and len(paths) == 80
     a = Assembly.load(paths)
@@ -382,8 +382,8 @@ def test_topolite_bunny(shared_data):
     np.testing.assert_allclose(areas, areas.round(), atol=1e-9)
 
 
-def test_topolite_ania(shared_data):
-    folder = shared_data / "topolite" / "ania"
+def test_topolite_ania(reference_data):
+    folder = reference_data / "topolite" / "ania"
     a = Assembly.load([folder / f"{name}.obj" for name in ("piece4_tri", "piece0", "piece1", "piece3", "piece2")])
     found = contacts(a)
     check_geometry(a, found, atol=1e-5)

@@ -13,21 +13,22 @@ from scipy.spatial.transform import Rotation
 from interlock.blocks import Assembly, load_compas
 from interlock.errors import InterlockError
 from interlock.verify import contacts
-from interlock.verify.cra import cra
-from interlock.verify.stability import _System, critical_tilt, rbe, tilted_gravity
+from interlock.verify.statics import cra
+from interlock.verify.statics import critical_tilt, rbe, tilted_gravity
+from interlock.verify.statics.equilibrium import EquilibriumSystem
 from tests.verify.test_stability import TABLE_2_TOL, _stack
 
 TOL = 0.1  # critical_tilt's bisection tolerance, degrees
 
 
-def _model(shared_data, name):
-    assembly = load_compas(shared_data / "compas_cra" / f"{name}.json")
+def _model(reference_data, name):
+    assembly = load_compas(reference_data / "compas_cra" / f"{name}.json")
     return assembly, contacts(assembly)
 
 
 def _certificate_holds(assembly, result, gravity, density=1.0):
     """Check a stable CRA result against (11) independently of the solver: equilibrium, cone, contact, alignment."""
-    system = _System.build(assembly, result.parameters["mu"], density, None, result.parameters["cone"],
+    system = EquilibriumSystem.build(assembly, result.parameters["mu"], density, None, result.parameters["cone"],
                            result.parameters["sides"], result.contacts)
     f = result.forces
     weights = system.weights[:, None] * np.asarray(gravity)[None, :]
@@ -61,7 +62,7 @@ def _certificate_holds(assembly, result, gravity, density=1.0):
 
 def test_an_undecided_milp_ends_in_a_local_solve_from_where_the_arch_settles(monkeypatch):
     from interlock.blocks import semicircular_arch
-    from interlock.verify import cra_ipopt
+    from interlock.verify.statics import cra_ipopt
 
     monkeypatch.setattr(cra_ipopt, "available", lambda: False)  # SLSQP alone, as without CasADi
     arch = semicircular_arch(8)  # tilted out of its plane, no quick answer and no MILP answer in 60 s either
@@ -84,7 +85,7 @@ def test_an_undecided_milp_ends_in_ipopt_on_problem_11_when_casadi_is_installed(
 
 def test_without_casadi_an_undecided_answer_says_how_to_get_the_papers_solver(monkeypatch):
     from interlock.blocks import semicircular_arch
-    from interlock.verify import cra_ipopt, cra_local
+    from interlock.verify.statics import cra_ipopt, cra_local
 
     monkeypatch.setattr(cra_ipopt, "available", lambda: False)
     monkeypatch.setattr(cra_local, "polish", lambda *args, **kwargs: None)  # SLSQP finds nothing either
@@ -144,8 +145,8 @@ def test_block_between_walls_falls_under_cra_not_rbe():
     assert result.status == "unstable" and "MILP" in result.message
 
 
-def test_out_of_time_is_inconclusive_not_a_guess(shared_data):
-    assembly, found = _model(shared_data, "A")
+def test_out_of_time_is_inconclusive_not_a_guess(reference_data):
+    assembly, found = _model(reference_data, "A")
     result = cra(assembly, mu=0.84, contacts=found, time_limit=1e-3)
     assert result.status == "inconclusive" and result.stable is None
     assert "too large" in result.message and "did not decide" in result.message
@@ -168,21 +169,21 @@ def test_verdict_invariant_under_rigid_motion_and_scaling(seed, scale, tilt):
 # --- the paper's models --------------------------------------------------------------------------------------
 
 
-def test_model_h_falls_at_mu_084_though_rbe_holds_it(shared_data):
+def test_model_h_falls_at_mu_084_though_rbe_holds_it(reference_data):
     # Table 1 / Sec. 2.2: RBE finds a prestressed equilibrium between the walls; no motion realises it
-    h, found = _model(shared_data, "H")
+    h, found = _model(reference_data, "H")
     assert rbe(h, mu=0.84, contacts=found).stable
     assert cra(h, mu=0.84, contacts=found).status == "unstable"
 
 
-def test_model_h_at_43_degrees_jams_in_the_exact_solution(shared_data):
+def test_model_h_at_43_degrees_jams_in_the_exact_solution(reference_data):
     # DIFFERENCE FROM THE PAPER: Sec. 2.2 says model H falls whatever the friction.  The exact solution of (11)
     # at the paper's friction angle of 43 deg (mu = 0.9325) is stable: the block turns by a few eps about y and
     # jams, touching one wall at its lower edge and the other at its upper edge.  Moments about the centroid:
     # the normal couple N h carries the friction W at lever w / 2, so N = W w / (2 h) and it holds while
     # mu >= 2 h / w = 2 * 0.8 / 1.8 = 0.889 (friction angle 41.6 deg).  A local solver started at rest
     # (IPOPT in the paper) does not find this turned motion.
-    h, found = _model(shared_data, "H")
+    h, found = _model(reference_data, "H")
     gravity = (0.0, 0.0, -1.0)
     jammed = cra(h, mu=math.tan(math.radians(43.0)), contacts=found)
     assert jammed.status == "stable"
@@ -195,43 +196,43 @@ def test_model_h_at_43_degrees_jams_in_the_exact_solution(shared_data):
 
 
 @pytest.mark.parametrize("mu", [0.84, math.tan(math.radians(43.0))])
-def test_model_a_falls_though_rbe_holds_it(shared_data, mu):
+def test_model_a_falls_though_rbe_holds_it(reference_data, mu):
     # Sec. 2.2: the only motion is straight down, which opens one face; RBE's solution needs both
-    a, found = _model(shared_data, "A")
+    a, found = _model(reference_data, "A")
     assert rbe(a, mu=mu, contacts=found).stable
     assert cra(a, mu=mu, contacts=found).status == "unstable"
 
 
-def test_a_block_pushed_into_its_groove_is_not_called_unstable(shared_data):
+def test_a_block_pushed_into_its_groove_is_not_called_unstable(reference_data):
     # type-c about y at mu 0.2 holds to 41.3 deg (Table 2).  At 30 deg the solution closes all 8 vertices without
     # sliding, so it attains the MILP's virtual-work bound and force bounds exactly: without BOUND_MARGIN, HiGHS'
     # tolerances called the MILP infeasible and the answer was a wrong "unstable" (found by the benchmark).
-    assembly, found = _model(shared_data, "type-c")
+    assembly, found = _model(reference_data, "type-c")
     result = cra(assembly, 0.2, gravity=tilted_gravity("y", 30.0), contacts=found)
     assert result.status == "stable"
     _certificate_holds(assembly, result, tilted_gravity("y", 30.0))
 
 
-def test_shelf_rbe_holds_it_and_cra_does_not_claim_it_stands(shared_data):
+def test_shelf_rbe_holds_it_and_cra_does_not_claim_it_stands(reference_data):
     # Fig. 7: RBE calls the shelf stable; 3DEC and the paper's CRA (IPOPT: infeasible) say blocks 9 and 10 slide.
     # NOT REPRODUCED: our MILP (380 binaries) is undecided after 10 min (HiGHS; SCIP 10 after 7 min; HiGHS's
     # heuristics at effort 0.8 find no point in 40 min), and IPOPT reports "infeasible" (or runs out of
     # iterations) from its three starts, as in the paper, which proves nothing; so the exact answer is
     # "inconclusive", never "stable".
     pytest.importorskip("casadi")
-    assembly, found = _model(shared_data, "shelf")
+    assembly, found = _model(reference_data, "shelf")
     assert rbe(assembly, 0.9, contacts=found).stable
     result = cra(assembly, 0.9, contacts=found, time_limit=1.0)
     assert result.status == "inconclusive" and "too large" in result.message
     assert "from 3 starts: Infeasible_Problem_Detected" in result.message and "proves nothing" in result.message
 
 
-def test_shelf_stable_stands_on_a_motion_ipopt_finds_and_the_exact_lp_accepts(shared_data):
+def test_shelf_stable_stands_on_a_motion_ipopt_finds_and_the_exact_lp_accepts(reference_data):
     # Fig. 12's repaired shelf: the MILP does not decide it in 10 min (300 binaries, so the local solvers go
     # first), IPOPT on (11) does, and the exact LP and the independent certificate confirm it: "stable" (before
     # IPOPT: "inconclusive")
     pytest.importorskip("casadi")
-    assembly, found = _model(shared_data, "shelf-stable")
+    assembly, found = _model(reference_data, "shelf-stable")
     result = cra(assembly, 0.9, contacts=found, time_limit=2.0)
     assert result.status == "stable" and "IPOPT" in result.message and "before the MILP" in result.message
     assert result.timings["milp"] == 0.0
@@ -253,9 +254,9 @@ TABLE_2_DIFFERS = {("type-a", "xy30", 0.84): 66.6}
 
 @pytest.mark.parametrize("mu", [0.20, 0.84])
 @pytest.mark.parametrize("model, axis", list(TABLE_2_CRA))
-def test_table_2_cra_critical_tilt(shared_data, model, axis, mu):
+def test_table_2_cra_critical_tilt(reference_data, model, axis, mu):
     paper = TABLE_2_CRA[model, axis][0 if mu == 0.20 else 1]
-    assembly, found = _model(shared_data, model)
+    assembly, found = _model(reference_data, model)
     ours = critical_tilt(assembly, axis, mu, method="cra", contacts=found)
     if (model, axis, mu) in TABLE_2_DIFFERS:
         assert ours == pytest.approx(TABLE_2_DIFFERS[model, axis, mu], abs=0.3)
@@ -264,13 +265,13 @@ def test_table_2_cra_critical_tilt(shared_data, model, axis, mu):
         assert ours == pytest.approx(paper, abs=TABLE_2_TOL[mu])
 
 
-def test_type_a_about_xy30_twists_and_holds_beyond_the_paper(shared_data):
+def test_type_a_about_xy30_twists_and_holds_beyond_the_paper(reference_data):
     # DIFFERENCE FROM THE PAPER: type-a about xy30 at mu = 0.84 is 62.9 deg in Table 2 (3DEC 62.7); the exact
     # solution of (11) holds to 66.6 deg.  At 65 deg the block slides along the groove while turning about x and
     # z, closing 6 of its 8 contact vertices; the slides, and so the frictions, point differently at each
     # vertex, and together they carry the load.  The turn needs slides up to eta = 100 eps (our default): with
     # the paper's eta / eps = 10 the motion is not available and our answer there is "inconclusive", not stable.
-    assembly, found = _model(shared_data, "type-a")
+    assembly, found = _model(reference_data, "type-a")
     gravity = tilted_gravity("xy30", 65.0)
     twisted = cra(assembly, 0.84, gravity=gravity, contacts=found)
     assert twisted.status == "stable"
@@ -279,13 +280,13 @@ def test_type_a_about_xy30_twists_and_holds_beyond_the_paper(shared_data):
     assert abs(turn[0]) > 1 and abs(turn[2]) > 1 and twisted.closed.sum() == 6
 
 
-def test_upstream_ratio_eta_over_eps_10_costs_a_degree_on_type_a(shared_data):
+def test_upstream_ratio_eta_over_eps_10_costs_a_degree_on_type_a(reference_data):
     # DIFFERENCE FROM THE PAPER (parameters): with compas_cra's eps = 1e-4, eta = 1e-3 (ratio 10) the exact
     # solution slides type-a along its groove at 20.7 deg, not 21.8: closing both faces of the V moves the
     # block 2 eps down, which slides it 1.73 eps down each face; the slide along the groove is at most
     # eta = 10 eps, so the friction (opposite to the slide) leans at least atan(0.173) = 9.8 deg off the
     # groove.  With eta / eps = 100 (our default) it leans 1 deg and the angle is 21.7.
-    assembly, found = _model(shared_data, "type-a")
+    assembly, found = _model(reference_data, "type-a")
     gravity = tilted_gravity("x", 21.2)
     assert cra(assembly, 0.2, gravity=gravity, contacts=found).status == "stable"
     assert cra(assembly, 0.2, gravity=gravity, contacts=found, eps=1e-5, eta=1e-4).status != "stable"

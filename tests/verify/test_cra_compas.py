@@ -16,11 +16,13 @@ from scipy.optimize import linprog  # noqa: E402
 from interlock.blocks import Assembly, load_compas, semicircular_arch  # noqa: E402
 from interlock.errors import InterlockError  # noqa: E402
 from interlock.verify import contacts as find_contacts  # noqa: E402
-from interlock.verify.cra import _Problem  # noqa: E402
-from interlock.verify.cra_compas import MISSING_MESSAGE, _to_minus_z, upstream_motion, upstream_solution  # noqa: E402
-from interlock.verify.stability import StabilityError, _gravity, tilted_gravity  # noqa: E402
+from interlock.verify.statics.cra import CRAProblem  # noqa: E402
+from interlock.verify.statics.cra_compas import (MISSING_MESSAGE, _to_minus_z, upstream_motion,  # noqa: E402
+                                                 upstream_solution)
+from interlock.verify.statics import StabilityError, tilted_gravity  # noqa: E402
+from interlock.verify.statics.equilibrium import gravity_vector  # noqa: E402
 
-DATA = Path("/work/shared/data/compas_cra")
+DATA = Path(__file__).resolve().parents[1] / "data" / "compas_cra"
 ARCH_MU = math.tan(math.radians(43.0))
 
 
@@ -87,8 +89,8 @@ def test_upstream_forces_balance_in_our_model():
     contacts = find_contacts(arch)
     gravity = tilted_gravity("y", 5)
     motion, forces = upstream_solution(arch, ARCH_MU, gravity=gravity, contacts=contacts)
-    problem = _Problem.build(arch, ARCH_MU, contacts=contacts)
-    weight = np.outer(problem.system.weights, _gravity(gravity))
+    problem = CRAProblem.build(arch, ARCH_MU, contacts=contacts)
+    weight = np.outer(problem.system.weights, gravity_vector(gravity))
     b_eq = -np.hstack([weight, problem.system.arms]).ravel()
     assert forces.shape == (len(problem.system.points), 3)
     assert np.abs(problem.system.a_eq @ forces.ravel() - b_eq).max() < 1e-6 * np.abs(weight).sum()
@@ -133,9 +135,9 @@ def _stack():
 
 
 def _in_eps_units(assembly, mu, gravity, motion):
-    """The CRA problem, its b_eq (as in _Problem.solve), the motion in units of eps (as in decider) and dd."""
-    problem = _Problem.build(assembly, mu)
-    load = np.outer(problem.system.weights, _gravity(gravity))
+    """The CRA problem, its b_eq (as in CRAProblem.solve), the motion in units of eps (as in decider) and dd."""
+    problem = CRAProblem.build(assembly, mu)
+    load = np.outer(problem.system.weights, gravity_vector(gravity))
     b_eq = -np.hstack([load, problem.system.arms]).ravel() / float(np.abs(load).sum())
     eps, length = problem.parameters["eps_absolute"], problem.parameters["length"]
     q = np.hstack([motion[:, :3] / eps, motion[:, 3:] * length / eps]).ravel()

@@ -14,8 +14,8 @@ from scipy.spatial.transform import Rotation
 from interlock import InterlockError
 from interlock.blocks import Assembly, presets
 from interlock.verify import check, interlocking_matrix
-from interlock.verify.motion import (OVERLAP_RTOL, FiniteMotion, MotionError, export_motion, finite_motion, moved,
-                                     twist_exponential)
+from interlock.gallery.motion import export_motion
+from interlock.verify.motion import OVERLAP_RTOL, FiniteMotion, MotionError, finite_motion, moved, twist_exponential
 
 GRID_FRAME = [0, 1, 2, 3, 5, 6, 7, 8]
 

@@ -10,7 +10,7 @@ from hypothesis import strategies as st
 
 from interlock import InterlockError
 from interlock.verify.npod import NPodError, leg_rows, mobility, npod, self_motion
-from interlock.verify.npod_bonds import bond_conditions, projection_bonds
+from interlock.verify.npod import bond_conditions, projection_bonds
 
 I = [[1, 0, 0], [0, 1, 0], [0, 0, 1]]
 

@@ -10,7 +10,7 @@ import trimesh
 from interlock.blocks import Assembly, load_compas, presets, random_hexagon, rhomblock_assembly
 from interlock.errors import InterlockError
 from interlock.verify import contacts
-from interlock.verify.stability import critical_tilt, rbe, tilted_gravity
+from interlock.verify.statics import critical_tilt, rbe, tilted_gravity
 
 TOL = 0.1  # the bisection tolerance of critical_tilt, degrees
 
@@ -107,10 +107,10 @@ TABLE_2_TOL = {0.20: 1.0, 0.84: 2.5}
 
 
 @pytest.fixture(scope="module")
-def wedges(shared_data):
+def wedges(reference_data):
     loaded = {}
     for model in ("type-a", "type-b", "type-c", "type-d"):
-        assembly = load_compas(shared_data / "compas_cra" / f"{model}.json")
+        assembly = load_compas(reference_data / "compas_cra" / f"{model}.json")
         loaded[model] = (assembly, contacts(assembly))
     return loaded
 
@@ -128,9 +128,9 @@ def test_table_2_rbe_critical_tilt(wedges, model, axis, mu):
         assert ours == pytest.approx(paper, abs=TABLE_2_TOL[mu])
 
 
-def test_model_h_is_stable_under_rbe(shared_data):
+def test_model_h_is_stable_under_rbe(reference_data):
     # Table 1 / Sec. 2.2: RBE finds a prestressed equilibrium between the two walls, whatever mu
-    h = load_compas(shared_data / "compas_cra" / "H.json")
+    h = load_compas(reference_data / "compas_cra" / "H.json")
     assert rbe(h, mu=0.84).stable and rbe(h, mu=0.2).stable
 
 
@@ -156,11 +156,11 @@ def test_rhomblock_patch_with_ring_frame_stable_without_friction():
         assert rbe(patch, mu=0.0, gravity=g, contacts=found).stable, g
 
 
-def test_topolite_bunny_with_its_frame_stable_without_friction(shared_data):
+def test_topolite_bunny_with_its_frame_stable_without_friction(reference_data):
     # interlocked (test_check: full rank with parts 1 and 2 fixed), so any load is carried without friction
     from tests.verify.test_check import BUNNY_PARTS
 
-    paths = [shared_data / "topolite" / "bunny" / f"part_{k}.obj" for k in range(1, BUNNY_PARTS + 1)]
+    paths = [reference_data / "topolite" / "bunny" / f"part_{k}.obj" for k in range(1, BUNNY_PARTS + 1)]
     bunny = Assembly.load(paths).with_frame([0, 1])
     found = contacts(bunny)
     for g in _directions():
@@ -239,14 +239,14 @@ def test_bad_tilt_axis_raises(axis):
 
 
 def test_equilibrium_matrix_normal_columns_are_the_interlocking_matrix_transposed():
-    # DESIGN.md: A_eq is the transpose of the kinematic matrix; rows here are (force, moment), there (omega, t)
+    # docs/statics.md: A_eq is the transpose of the kinematic matrix; rows here are (force, moment), there (omega, t)
     from interlock.verify import interlocking_matrix
-    from interlock.verify.stability import _System
+    from interlock.verify.statics.equilibrium import EquilibriumSystem
 
     row = [trimesh.creation.box(bounds=[[x, 0, 0], [x + 1, 1, 1]]) for x in range(3)]
     assembly = Assembly.from_meshes(row, frame=[0])
     kinematic = interlocking_matrix(assembly).matrix.toarray()
-    normal_columns = _System.build(assembly, 0.5, 1.0, None, "paper", 8, None).a_eq.toarray()[:, 0::3]
+    normal_columns = EquilibriumSystem.build(assembly, 0.5, 1.0, None, "paper", 8, None).a_eq.toarray()[:, 0::3]
     swap = np.r_[3:6, 0:3, 9:12, 6:9]
     assert np.allclose(normal_columns, kinematic.T[swap])
 
@@ -255,23 +255,23 @@ def test_equilibrium_matrix_normal_columns_are_the_interlocking_matrix_transpose
 
 
 @pytest.mark.parametrize("angle", [0.0, 30.0, 60.0, 120.0])
-def test_clarabel_path_agrees_with_highs(shared_data, monkeypatch, angle):
-    import interlock.verify.stability as stability
+def test_clarabel_path_agrees_with_highs(reference_data, monkeypatch, angle):
+    import interlock.verify.statics.equilibrium as equilibrium
 
-    assembly = load_compas(shared_data / "compas_cra" / "type-c.json")
+    assembly = load_compas(reference_data / "compas_cra" / "type-c.json")
     found = contacts(assembly)
     gravity = tilted_gravity("xy30", angle)
     expected = rbe(assembly, 0.84, gravity=gravity, contacts=found)
-    monkeypatch.setattr(stability, "LARGE_LP", 0)
+    monkeypatch.setattr(equilibrium, "LARGE_LP", 0)
     large = rbe(assembly, 0.84, gravity=gravity, contacts=found)
     assert large.stable == expected.stable and large.message.startswith("Clarabel")
     if large.stable:
         assert large.resultants.sum(axis=0) == pytest.approx(expected.resultants.sum(axis=0), abs=1e-6)
 
 
-def test_armadillo_vault_stands_with_upstream_contacts(shared_data):
+def test_armadillo_vault_stands_with_upstream_contacts(reference_data):
     # 399 blocks, 33 supports; contacts as compas_assembly finds them (tmax = 0.05, amin = 1e-4, any angle)
-    vault = load_compas(shared_data / "compas_cra" / "armadillo.json")
+    vault = load_compas(reference_data / "compas_cra" / "armadillo.json")
     found = contacts(vault, gap=0.05 / vault.scale, area_rtol=1e-4 / vault.scale**2, angle_tol=0.2)
     result = rbe(vault, mu=0.84, contacts=found)
     assert result.stable and result.message.startswith("Clarabel")

@@ -1,0 +1,142 @@
+"""A contact between two blocks: the polygon where their faces meet, its normal and plane."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import shapely
+
+from interlock.errors import InterlockError
+
+__all__ = ["Contact", "ContactError", "plane_bases"]
+
+
+class ContactError(InterlockError):
+    """Input that a contact cannot be made of (not an assembly, bad tolerances, bad points)."""
+
+
+@dataclass(frozen=True, eq=False)
+class Contact:
+    """One face-to-face contact polygon between blocks ``i < j`` (one row group of Def. 3.3).
+
+    Attributes
+    ----------
+    i, j : int
+        The blocks in contact, ``i < j``.
+    normal : array (3,)
+        Unit normal pointing from block ``i`` towards block ``j`` (block ``i``'s
+        outward facet normal).
+    vertices : array (k, 3)
+        The overlap polygon on block ``i``'s facet plane (with ``gap > 0``: on
+        the parallel plane halfway to block ``j``'s facet, see :func:`contacts`):
+        the exterior ring (counter-clockwise about ``normal``, no closing
+        repeat), then each hole ring.  Every vertex gives rows of the
+        interlocking matrix.
+    area : float
+        Area of the polygon.
+    facet_i, facet_j : int
+        Indices of the touching facets in :func:`facets` of each block.
+    polygon : shapely.Polygon
+        The polygon in 2D plane coordinates: ``origin + x * basis[0] + y * basis[1]``.
+    origin : array (3,)
+        A point of the plane (the centroid of block ``i``'s facet, moved halfway
+        to block ``j``'s facet when ``gap > 0``).
+    basis : array (2, 3)
+        Orthonormal in-plane vectors with ``basis[0] x basis[1] = normal``.
+    deviation : float
+        How far the blocks' real faces stray from the modelled common plane
+        over this contact: the flatness of either facet (:attr:`Facets.flatness`)
+        plus the largest distance of a contact vertex from block ``j``'s facet
+        plane (for a contact across a gap, its :attr:`separation`).  Zero up to
+        rounding for faces that really are coplanar.
+    planar : bool
+        Both facets are planar up to rounding (:attr:`Facets.planar`).  When
+        False, the tolerances merged triangles bent by a small angle into one
+        facet: the real contact has several planes, so it may block a sliding
+        motion that the modelled one allows.  A gap does not make a contact
+        non-planar: two parallel planar faces a gap apart block no sliding
+        either (see :func:`contacts`).
+    separation : float
+        The gap this contact bridges: zero for faces that touch (coplanar
+        within ``rtol``, and always when ``gap = 0``); for a contact found only
+        thanks to ``gap > 0``, the largest distance from block ``j``'s facet
+        plane of the overlap's vertices on block ``i``'s facet plane (at most
+        ``(rtol + gap) * scale``; also part of :attr:`deviation`).
+    """
+
+    i: int
+    j: int
+    normal: np.ndarray
+    vertices: np.ndarray
+    area: float
+    facet_i: int
+    facet_j: int
+    polygon: shapely.Polygon = field(repr=False)
+    origin: np.ndarray = field(repr=False)
+    basis: np.ndarray = field(repr=False)
+    deviation: float = 0.0
+    planar: bool = True
+    separation: float = 0.0
+
+    @classmethod
+    def at_points(cls, i: int, j: int, normal, points) -> Contact:
+        """A point or line contact given by hand: block ``j``'s points ``points`` on block ``i``'s face.
+
+        :func:`contacts` finds face-to-face contacts only (Remark 3.11); a
+        corner or an edge of block ``j`` resting on a face of block ``i``
+        (outward unit ``normal``, towards ``j``) gives one row of the
+        interlocking matrix per point, and the gap function of
+        :mod:`interlock.verify.second_order` (an n-pod leg, ``docs/npod.md``).
+
+        >>> c = Contact.at_points(0, 1, [0, 0, 1], [[0, 0, 0], [1, 0, 0]])
+        >>> len(c.vertices), c.area
+        (2, 0.0)
+        """
+        if not (isinstance(i, (int, np.integer)) and isinstance(j, (int, np.integer)) and 0 <= i < j):
+            raise ContactError(f"a contact needs block indices 0 <= i < j, got {i!r}, {j!r}")
+        n = np.asarray(normal, dtype=float).reshape(-1)
+        vertices = np.asarray(points, dtype=float).reshape(-1, 3) if np.size(points) else np.zeros((0, 3))
+        if n.shape != (3,) or not np.isfinite(n).all() or not np.linalg.norm(n) > 0:
+            raise ContactError(f"normal must be a non-zero finite 3D vector, got {normal!r}")
+        if not len(vertices) or not np.isfinite(vertices).all():
+            raise ContactError("points must be one or more finite 3D points, shape (k, 3)")
+        n = n / np.linalg.norm(n)
+        basis = plane_bases(n[None])[0]
+        origin = vertices.mean(axis=0)
+        for array in (n, vertices, origin, basis):
+            array.setflags(write=False)
+        return cls(int(i), int(j), n, vertices, 0.0, -1, -1, shapely.Polygon(), origin, basis)
+
+    @property
+    def ring_sizes(self) -> tuple[int, ...]:
+        """Vertex counts of the exterior ring and of each hole, in the order of :attr:`vertices`."""
+        if self.polygon.is_empty:  # a point or line contact (:meth:`at_points`)
+            return (len(self.vertices),)
+        rings = [self.polygon.exterior, *self.polygon.interiors]
+        return tuple(len(ring.coords) - 1 for ring in rings)
+
+    def __str__(self) -> str:
+        n = ", ".join(f"{x:.3g}" for x in self.normal)
+        holes = len(self.ring_sizes) - 1
+        extra = f" with {holes} hole(s)" if holes else ""
+        bent = "" if self.planar else f", faces bent by up to {self.deviation:.3g} (planar only within tolerance)"
+        apart = f", across a gap of up to {self.separation:.3g}" if self.separation else ""
+        return (f"contact {self.i}-{self.j}: {len(self.vertices)} vertices{extra}, area {self.area:.6g}, "
+                f"normal ({n}), facets {self.facet_i}/{self.facet_j}{bent}{apart}")
+
+    def to_dict(self) -> dict:
+        """JSON-serialisable form; ``ring_sizes`` splits ``vertices`` into exterior and holes."""
+        return {"i": self.i, "j": self.j, "normal": self.normal.tolist(), "vertices": self.vertices.tolist(),
+                "ring_sizes": list(self.ring_sizes), "area": self.area, "facet_i": self.facet_i,
+                "facet_j": self.facet_j, "origin": self.origin.tolist(), "basis": self.basis.tolist(),
+                "deviation": self.deviation, "planar": self.planar, "separation": self.separation}
+
+
+def plane_bases(normals):
+    """Orthonormal (u, v) per unit normal n with u x v = n."""
+    axis = np.eye(3)[np.argmin(np.abs(normals), axis=1)]
+    u = np.cross(normals, axis)
+    u /= np.linalg.norm(u, axis=1)[:, None]
+    return np.stack([u, np.cross(normals, u)], axis=1)
+

@@ -1,0 +1,287 @@
+"""Planar facets of a triangle mesh: coplanar triangles grouped into the polygons a contact is made of."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from numbers import Real
+
+import numpy as np
+import shapely
+import trimesh
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+
+from interlock.blocks.assembly import Assembly
+from interlock.blocks.contact import ContactError, plane_bases
+
+__all__ = ["Facets", "FacetTable", "facets", "clean_polygons", "check_tolerance", "DEFAULT_CONTACT_RTOL",
+           "DEFAULT_ANGLE_TOL", "PLANAR_ULPS", "TINY"]
+
+#: Distance tolerance relative to the model size: two planes closer than this
+#: coincide, a gap narrower than this is a contact, an overlap thinner than this
+#: is an edge touch, and facet outlines are simplified within it.  Mesh files
+#: from CAD tools are often accurate to a few 1e-6 only (TopoLite's ``ania``).
+DEFAULT_CONTACT_RTOL = 1e-5
+#: Angle tolerance (radians): normals within it are parallel (facets) or
+#: opposite (contacts).  Rotated pieces in files may be off by ~4e-5 rad (``ania``).
+DEFAULT_ANGLE_TOL = 1e-4
+
+#: A facet is planar when every vertex of its triangles lies within this many units in the last place (of
+#: the mesh's largest coordinate) of its plane, i.e. within rounding; farther means the tolerances grouped
+#: triangles that are not coplanar (a face bent by less than ``angle_tol``).  A bend of 1e-14 on a unit
+#: block is about 25 such units; rounding leaves well under one.
+PLANAR_ULPS = 8
+
+#: Floor for tolerances of zero (relative; keeps the spatial index's metric finite).
+TINY = 1e-15
+
+
+@dataclass(frozen=True, eq=False)
+class Facets:
+    """The planar facets of a triangle mesh: maximal edge-connected sets of coplanar triangles.
+
+    Facet ``f`` is the polygon ``polygons[f]`` (2D, possibly non-convex, with
+    holes) placed by ``origins[f] + x * bases[f, 0] + y * bases[f, 1]``; its
+    outward normal is ``normals[f] = bases[f, 0] x bases[f, 1]``; ``faces[f]``
+    lists its triangles.  Facets are ordered by their lowest triangle index.
+    ``flatness[f]`` is the largest distance of a vertex of its triangles from
+    its plane, and ``planar[f]`` says whether that is rounding only
+    (:data:`PLANAR_ULPS`) rather than a bend the tolerances accepted.
+    """
+
+    normals: np.ndarray
+    origins: np.ndarray
+    bases: np.ndarray
+    polygons: np.ndarray
+    faces: tuple[np.ndarray, ...]
+    flatness: np.ndarray
+    planar: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.normals)
+
+    @property
+    def areas(self) -> np.ndarray:
+        return shapely.area(self.polygons)
+
+
+def facets(mesh: trimesh.Trimesh, atol: float | None = None, angle_tol: float = DEFAULT_ANGLE_TOL) -> Facets:
+    """The planar facets of a triangle mesh (polygonal faces that a file format triangulated).
+
+    Adjacent triangles (sharing an edge, after merging duplicate vertices)
+    belong to one facet when their normals agree within ``angle_tol`` or the
+    smaller one's far vertex lies within ``atol`` of the larger one's plane; a
+    group that is not flat within ``atol`` (a finely tessellated curved
+    surface) falls apart into its triangles.  A triangle in no group is a facet
+    of its own.  Degenerate triangles are left out.
+
+    Parameters
+    ----------
+    mesh : trimesh.Trimesh
+        An outward-oriented triangle mesh.
+    atol : float, optional
+        Distance tolerance; default ``DEFAULT_CONTACT_RTOL * mesh.scale``.
+    angle_tol : float, optional
+        Angle tolerance in radians.
+
+    Returns
+    -------
+    Facets
+
+    Examples
+    --------
+    >>> f = facets(trimesh.creation.box())
+    >>> len(f), f.areas.round(12).tolist()
+    (6, [1.0, 1.0, 1.0, 1.0, 1.0, 1.0])
+    """
+    if not isinstance(mesh, trimesh.Trimesh):
+        raise ContactError(f"facets() needs a trimesh.Trimesh, got {type(mesh).__name__}")
+    mesh = mesh.copy()
+    mesh.merge_vertices(merge_tex=True, merge_norm=True)
+    atol = DEFAULT_CONTACT_RTOL * mesh.scale if atol is None else check_tolerance("atol", atol)
+    return _facets(mesh, atol, check_tolerance("angle_tol", angle_tol))
+
+
+def check_tolerance(name, value) -> float:
+    """``value`` as a float when it is a finite number >= 0 (a tolerance); ContactError otherwise."""
+    if isinstance(value, bool) or not isinstance(value, Real) or not math.isfinite(value) or value < 0:
+        raise ContactError(f"{name} must be a finite number >= 0, got {value!r}")
+    return float(value)
+
+
+class FacetTable:
+    """The facets of every block in world coordinates, concatenated block after block."""
+
+    def __init__(self, assembly: Assembly, atol: float, angle_tol: float):
+        types = assembly.types
+        per_type = {}
+        for t in np.unique(types):
+            mesh = assembly.meshes[t].copy()
+            mesh.merge_vertices(merge_tex=True, merge_norm=True)
+            per_type[t] = _facets(mesh, atol, angle_tol)
+        counts = np.array([len(per_type[t]) for t in types])
+        self.start = np.concatenate([[0], np.cumsum(counts)])
+        total = self.start[-1]
+        self.block = np.repeat(np.arange(len(types)), counts)
+        self.local = np.arange(total) - self.start[self.block]
+        self.normals, self.origins = np.empty((total, 3)), np.empty((total, 3))
+        self.bases, self.polygons = np.empty((total, 2, 3)), np.empty(total, dtype=object)
+        self.flatness, self.planar = np.empty(total), np.empty(total, dtype=bool)
+        rot, shift = assembly.transforms[:, :3, :3], assembly.transforms[:, :3, 3]
+        mirrored = assembly.mirrored
+        for t, f in per_type.items():
+            for mirror in (False, True):
+                blocks = np.flatnonzero((types == t) & (mirrored == mirror))
+                if not len(blocks):
+                    continue
+                rows = (self.start[blocks][:, None] + np.arange(len(f))).ravel()
+                r = rot[blocks]
+                self.normals[rows] = np.einsum("bij,fj->bfi", r, f.normals).reshape(-1, 3)
+                self.origins[rows] = (np.einsum("bij,fj->bfi", r, f.origins) + shift[blocks, None]).reshape(-1, 3)
+                bases = np.einsum("bij,fkj->bfki", r, f.bases).reshape(-1, 2, 3)
+                polygons = f.polygons
+                if mirror:  # keep u x v = n: flip v, and y in the plane
+                    bases[:, 1] *= -1
+                    polygons = clean_polygons(shapely.transform(polygons, lambda xy: xy * [1.0, -1.0]), 0.0)
+                self.bases[rows] = bases
+                self.polygons[rows] = np.tile(polygons, len(blocks))
+                self.flatness[rows] = np.tile(f.flatness, len(blocks))
+                self.planar[rows] = np.tile(f.planar, len(blocks))
+
+
+# --- private helpers --------------------------------------------------------------------------------
+
+
+def _facets(mesh: trimesh.Trimesh, atol: float, angle_tol: float) -> Facets:
+    tri = mesh.triangles
+    cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    twice_area = np.linalg.norm(cross, axis=1)
+    good = twice_area > np.finfo(float).eps * max(mesh.scale, TINY) ** 2
+    normal = np.zeros_like(cross)
+    normal[good] = cross[good] / twice_area[good, None]
+
+    # coplanar neighbours: normals agree, or the smaller face's far vertex is on the larger's plane
+    adj = mesh.face_adjacency
+    adj = adj[good[adj].all(axis=1)] if len(adj) else adj.reshape(0, 2)
+    keep = np.zeros(len(adj), dtype=bool)
+    if len(adj):
+        a, b = adj[:, 0], adj[:, 1]
+        angle = 2 * np.arcsin(np.clip(np.linalg.norm(normal[a] - normal[b], axis=1) / 2, 0, 1))
+        big_first = twice_area[a] >= twice_area[b]
+        big, small = np.where(big_first, a, b), np.where(big_first, b, a)
+        unshared = _unshared_vertex(mesh.faces[small], mesh.faces[big])
+        far = np.abs(np.einsum("ij,ij->i", normal[big], mesh.vertices[unshared] - tri[big, 0]))
+        same_side = np.einsum("ij,ij->i", normal[a], normal[b]) > 0
+        keep = same_side & ((angle <= angle_tol) | (far <= atol))
+    n_faces = len(mesh.faces)
+    graph = coo_matrix((np.ones(keep.sum()), (adj[keep, 0], adj[keep, 1])), shape=(n_faces, n_faces))
+    _, label = connected_components(graph, directed=False)
+
+    # groups that are not flat fall apart into single triangles
+    _, label = np.unique(label, return_inverse=True)
+    nrm, org = _planes(label, cross, tri, good)
+    dist = np.abs(np.einsum("fvi,fi->fv", tri - org[label][:, None], nrm[label])).max(axis=1)
+    bent = np.zeros(label.max() + 1, dtype=bool)
+    np.logical_or.at(bent, label[good], dist[good] > atol)
+    split = bent[label]
+    label = np.where(split, label.max() + 1 + np.arange(n_faces), label)
+    label[~good] = -1
+    # number facets by their lowest triangle index
+    used = np.flatnonzero(good)
+    _, first, label_g = np.unique(label[used], return_index=True, return_inverse=True)
+    order = np.argsort(np.argsort(used[first], kind="stable"), kind="stable")
+    label = np.full(n_faces, -1)
+    label[used] = order[label_g]
+    n_facets = len(first)
+    if n_facets == 0:
+        raise ContactError("the mesh has no triangle of positive area")
+    nrm, org = _planes(label[used], cross[used], tri[used], np.ones(len(used), dtype=bool))
+    bases = plane_bases(nrm)
+
+    # facet outlines: union of the projected triangles
+    lab = label[used]
+    flat = np.einsum("fvi,fai->fva", tri[used] - org[lab][:, None], bases[lab])
+    triangles = shapely.polygons(flat)
+    members = np.argsort(lab, kind="stable")
+    groups = np.split(members, np.cumsum(np.bincount(lab, minlength=n_facets))[:-1])
+    polygons = np.empty(n_facets, dtype=object)
+    for f, group in enumerate(groups):
+        polygons[f] = triangles[group[0]] if len(group) == 1 else shapely.union_all(triangles[group])
+    polygons = clean_polygons(polygons, atol)
+    # how far the grouped triangles really are from their common plane: rounding, or a bend within tolerance
+    offsets = np.abs(np.einsum("fvi,fi->fv", tri[used] - org[lab][:, None], nrm[lab])).max(axis=1)
+    flatness = np.zeros(n_facets)
+    np.maximum.at(flatness, lab, offsets)
+    magnitude = float(np.abs(mesh.vertices).max(initial=0.0)) or 1.0
+    planar = flatness <= PLANAR_ULPS * np.finfo(float).eps * magnitude
+    for array in (nrm, org, bases, polygons, flatness, planar):
+        array.setflags(write=False)
+    return Facets(nrm, org, bases, polygons, tuple(used[g] for g in groups), flatness, planar)
+
+
+def _unshared_vertex(faces_small, faces_big):
+    """For each pair of adjacent faces, the vertex of the first not in the second."""
+    not_shared = ~(faces_small[:, :, None] == faces_big[:, None, :]).any(axis=2)
+    return faces_small[np.arange(len(faces_small)), not_shared.argmax(axis=1)]
+
+
+def _planes(label, cross, tri, good):
+    """Area-weighted unit normal and centroid per label."""
+    count = label.max() + 1
+    w = np.where(good, np.linalg.norm(cross, axis=1), 0.0)
+    nrm = np.stack([np.bincount(label, cross[:, k] * good, count) for k in range(3)], axis=1)
+    centres = tri.mean(axis=1)
+    total = np.bincount(label, w, count)
+    org = np.stack([np.bincount(label, centres[:, k] * w, count) for k in range(3)], axis=1)
+    org /= np.where(total > 0, total, 1.0)[:, None]
+    length = np.linalg.norm(nrm, axis=1)
+    nrm /= np.where(length > 0, length, 1.0)[:, None]
+    return nrm, org
+
+
+def clean_polygons(polygons, atol):
+    """Drop near-duplicate and near-collinear vertices anywhere in each ring; exteriors counter-clockwise.
+
+    A vertex closer than ``atol`` to the segment joining its two neighbours is
+    removed, repeatedly, for all rings at once (each pass removes, in every
+    run of such vertices, those nearest to their neighbours' segment, then
+    re-checks).  Douglas-Peucker
+    simplification would keep each ring's start point, so a duplicate there
+    would survive and add a redundant row to the interlocking matrix.
+    """
+    polygons = np.atleast_1d(polygons)
+    rings, polygon_of = shapely.get_rings(polygons, return_index=True)
+    coords, ring_of = shapely.get_coordinates(rings, return_index=True)
+    if not len(coords):
+        return np.array([shapely.Polygon()] * len(polygons), dtype=object)
+    closing = np.r_[ring_of[1:] != ring_of[:-1], True]
+    coords, ring_of = coords[~closing], ring_of[~closing]
+    while len(coords):
+        first = np.r_[0, np.flatnonzero(np.diff(ring_of)) + 1]
+        length = np.diff(np.r_[first, len(coords)])
+        first, length = np.repeat(first, length), np.repeat(length, length)
+        position = np.arange(len(coords)) - first
+        prev, nxt = first + (position - 1) % length, first + (position + 1) % length
+        a, ac = coords[prev], coords[nxt] - coords[prev]
+        squared = np.einsum("ij,ij->i", ac, ac)
+        t = np.clip(np.einsum("ij,ij->i", coords - a, ac) / np.where(squared > 0, squared, 1.0), 0.0, 1.0)
+        distance = np.hypot(*(coords - a - t[:, None] * ac).T)
+        near = (distance <= atol) & (length > 3)
+        # in a run of removable vertices remove the most collinear first (a corner beside a spurious
+        # vertex from nearly parallel edges is farther from its neighbours' segment than the spurious one)
+        remove = near & ~(near[prev] & (distance[prev] < distance)) & ~(near[nxt] & (distance[nxt] <= distance))
+        if not remove.any():
+            break
+        coords, ring_of = coords[~remove], ring_of[~remove]
+    counts = np.bincount(ring_of, minlength=len(rings))
+    bounds = np.r_[0, np.cumsum(counts)]
+    first_ring = np.r_[0, np.cumsum(np.bincount(polygon_of, minlength=len(polygons)))]  # rings come per polygon
+    out = np.empty(len(polygons), dtype=object)
+    for p in range(len(polygons)):
+        members = range(first_ring[p], first_ring[p + 1])
+        valid = [coords[bounds[k]:bounds[k + 1]] for k in members if counts[k] >= 3]
+        exterior_ok = len(members) > 0 and counts[members[0]] >= 3
+        out[p] = shapely.Polygon(valid[0], valid[1:]) if exterior_ok else shapely.Polygon()
+    return shapely.orient_polygons(shapely.normalize(out))
+

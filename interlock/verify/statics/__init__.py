@@ -1,0 +1,23 @@
+"""Stability under self-weight: rigid-block equilibrium (RBE), coupled rigid-block analysis (CRA), the tilt test.
+
+The shared equilibrium problem is in :mod:`~interlock.verify.statics.equilibrium`;
+the theory, with the CRA paper's numbering, is in ``docs/statics.md``.
+
+>>> import trimesh
+>>> from interlock.blocks import Assembly
+>>> from interlock.verify.statics import rbe
+>>> cubes = [trimesh.creation.box(bounds=[[0, 0, z], [1, 1, z + 1]]) for z in (0, 1)]
+>>> rbe(Assembly.from_meshes(cubes, frame=[0]), mu=0.5).stable
+True
+"""
+
+from interlock.verify.statics.cra import (DEFAULT_FORCE_BOUND, DEFAULT_MIN_SLIDE, DEFAULT_SECTORS, REFINED_SECTORS,
+                                          CRAResult, cra)
+from interlock.verify.statics.equilibrium import (CONES, DEFAULT_EPS, DEFAULT_ETA, DEFAULT_SIDES, StabilityError,
+                                                  StabilityResult)
+from interlock.verify.statics.rbe import rbe
+from interlock.verify.statics.tilt import DEFAULT_TILT_STEP, DEFAULT_TILT_TOL, TILT_AXES, critical_tilt, tilted_gravity
+
+__all__ = ["rbe", "StabilityResult", "StabilityError", "cra", "CRAResult", "critical_tilt", "tilted_gravity",
+           "TILT_AXES", "CONES", "DEFAULT_SIDES", "DEFAULT_TILT_STEP", "DEFAULT_TILT_TOL", "DEFAULT_EPS", "DEFAULT_ETA",
+           "DEFAULT_SECTORS", "DEFAULT_FORCE_BOUND", "DEFAULT_MIN_SLIDE", "REFINED_SECTORS"]

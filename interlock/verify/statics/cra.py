@@ -1,0 +1,687 @@
+"""Coupled rigid-block analysis (CRA paper, Sec. 3.1, problem (11)), solved globally as a MILP.
+
+RBE (:func:`interlock.verify.statics.rbe`) asks only for forces in
+equilibrium.  CRA also asks for a virtual motion ``dq`` of the free blocks
+that *realises* them:
+
+- normal force only where the motion closes the contact by the overlap
+  ``eps``, Eq. (10): ``f_n (dd_n + eps) = 0``, ``dd_n + eps >= 0``;
+- friction opposite to the virtual slide, Eq. (9): ``f_t = -alpha dd_t``,
+  ``alpha >= 0`` (no slide, no friction);
+- small motions, ``|dd| <= eta`` per component;
+
+where ``dd = A_eq^T dq`` (Eq. (8)) are the relative displacements at the
+contact vertices.  The paper solves (11) locally with IPOPT; here it is
+decided globally:
+
+0. **Quick answers.**  No RBE equilibrium means "unstable" (CRA only removes
+   solutions).  A motion that realises an equilibrium exactly (an LP) means
+   "stable"; tried are the motion of a nearby load (:func:`decider`), the
+   allowed motion on which the load does the most work (an LP: a block
+   pushed into its seat; it settles 198 of the 235 stable wedge cases of
+   Table 2's scans), one realising the equilibrium with the least friction
+   (friction needs a slide, so the fewer vertices carry it the freer the
+   motion: the 36-voussoir arch) and one realising RBE's least-force equilibrium.
+1. **MILP relaxation.**  A binary per vertex switches Eq. (10); binaries over
+   ``sectors`` angular sectors of the contact plane put the slide ``dd_t``
+   and the reversed friction ``-f_t`` in the same sector, with a slide of at
+   least ``min_slide`` along the sector's bisector where there is friction;
+   the big Ms are per vertex (the largest RBE ``f_n``, the reach of the motion).
+   Virtual work bounds the forces: for a solution of (11), ``f . dd = b . q``
+   with ``f_n dd_n = -eps f_n`` and ``f_t . dd_t = -alpha |dd_t|^2``, so
+   ``sum f_n <= -b . q / eps``, at most the work the load can do on any
+   allowed motion (an LP); this row and the bound are in the MILP, beside face cuts
+   (closed vertices span a face of a convex contact polygon).
+   Every solution of (11) whose friction vertices slide at least ``min_slide``
+   (and, if ``force_bound`` is below the virtual-work bound, whose forces stay
+   below it) is a solution of the MILP, so an infeasible MILP proves "unstable"
+   (HiGHS through :func:`scipy.optimize.milp`).
+2. **Exact check.**  A feasible MILP gives a motion.  With the motion fixed,
+   (11) is linear in ``(f_n, alpha)``: an LP over exactly the contacts it
+   closes and the slides it makes.  A feasible LP is a solution of (11):
+   "stable", with the forces and the motion.  If it fails (the MILP's
+   friction was only in the right sector), the MILP's forces fix the
+   active set and the friction directions and an LP looks for a motion that
+   realises them exactly, and SLSQP solves (11) locally from the MILP's point; then the
+   sectors are refined (``4 -> 8 -> 16``).
+   If none of this gives a solution, or HiGHS does not decide within ``time_limit``, local solvers
+   have the last word (above :data:`LOCAL_FIRST_BINARIES` binaries they go before the MILP): IPOPT
+   on the whole of (11), as in the paper, if CasADi is installed (:mod:`interlock.verify.statics.cra_ipopt`),
+   then SLSQP from where the assembly settles (the motion closing the most vertices that, keeping
+   them closed, does the most work).  If the exact LP accepts a motion they find, the answer is
+   "stable", otherwise "inconclusive" (a local solver's "infeasible" proves nothing).
+
+Only the ratio ``eta / eps`` matters (the constraints are homogeneous in
+``(dq, eps, eta)``); internally lengths of the motion are in units of ``eps``.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import numpy as np
+import scipy.sparse as sp
+import shapely
+from scipy.optimize import Bounds, LinearConstraint, linprog, milp
+
+from interlock.verify.statics import cra_local
+from interlock.verify.statics.cra_compas import upstream_solution
+from interlock.verify.statics.cra_local import ACTIVE_TOL
+from interlock.verify.statics.equilibrium import (DEFAULT_EPS, DEFAULT_ETA, DEFAULT_SIDES, EquilibriumSystem,
+                                                  StabilityError, gravity_vector, json_float, positive)
+
+__all__ = ["CRAResult", "CRAProblem", "cra", "decider", "DEFAULT_EPS", "DEFAULT_ETA", "DEFAULT_SECTORS", "DEFAULT_FORCE_BOUND",
+           "DEFAULT_MIN_SLIDE", "REFINED_SECTORS"]
+
+#: Angular sectors of the contact plane in the first MILP, and the refinements tried when its motion
+#: cannot be made exact.
+DEFAULT_SECTORS = 4
+REFINED_SECTORS = (8, 16)
+#: Largest normal force at one vertex, in units of the total weight of the free blocks.
+DEFAULT_FORCE_BOUND = 1e3
+#: Smallest virtual slide (along the sector bisector) of a vertex carrying friction, as a fraction of ``eps``.
+DEFAULT_MIN_SLIDE = 1e-3
+#: A vertex slides when ``|dd_t| > SLIDE_TOL * eps`` (it is closed when ``dd_n + eps <= ACTIVE_TOL * eps``).
+SLIDE_TOL = 1e-7
+#: Slack added to every bound the MILP derives by an LP (big Ms, the virtual-work bound and row), relative and
+#: absolute (forces in units of the weight, motions of eps): a solution of (11) often attains them exactly (a
+#: block pushed into a groove closes every vertex and does exactly the most work), and HiGHS' tolerances would
+#: then call the MILP infeasible.
+BOUND_MARGIN = 1e-3
+#: Factor on the big Ms of the second, looser MILP that confirms an infeasibility (see ``CRAProblem.milp``).
+LOOSE = 10.0
+#: Seconds HiGHS may spend on one MILP before the answer is "inconclusive".
+DEFAULT_TIME_LIMIT = 60.0
+#: Above this many binaries (vertices times ``1 + sectors``) the local solvers run before the MILP, which
+#: rarely decides so large a model in time (the shelves of Fig. 7 and 12: 300-460; the wedges: 40-80).
+LOCAL_FIRST_BINARIES = 200
+#: Motions of earlier stable loads that :func:`decider` tries first.
+WARM_STARTS = 3
+
+STATUSES = ("stable", "unstable", "inconclusive")
+
+
+@dataclass(frozen=True, eq=False)
+class CRAResult:
+    """The outcome of :func:`cra`.
+
+    Attributes
+    ----------
+    status : {"stable", "unstable", "inconclusive"}
+        "stable": an exact solution of (11) was found (``forces`` and ``motion`` are one);
+        "unstable": the MILP relaxation has no solution, so (11) has none within the bounds in
+        ``parameters``; "inconclusive": the relaxation has one but no exact solution was found.
+    stable : bool or None
+        ``True``, ``False``, or ``None`` for inconclusive.
+    forces : ndarray (s, 3)
+        Per contact vertex ``(f_n, f_u, f_v)`` in the contact's frame, acting on block ``j`` (as in
+        :class:`~interlock.verify.statics.StabilityResult`); NaN unless stable.
+    motion : ndarray (f, 6)
+        The realising virtual motion of each free block: ``(t, omega)`` (translation, rotation about the
+        block's centroid) in world units, with loaded vertices overlapping by ``eps`` (absolute); NaN unless
+        stable.
+    free : ndarray of int (f,)
+        The blocks that ``motion`` rows belong to.
+    closed : ndarray of bool (s,)
+        Vertices that the motion closes (``dd_n = -eps``), where normal force may act.
+    sliding : ndarray (s, 2)
+        The relative virtual slide ``dd_t`` in each contact's ``(u, v)`` basis, in units of ``eps``.
+    points, vertex_contact, contacts
+        As in :class:`~interlock.verify.statics.StabilityResult`.
+    message : str
+        What decided the verdict.
+    parameters : dict
+        ``mu``, ``cone``, ``sides``, ``eps`` and ``eta`` (relative and absolute), ``sectors`` tried,
+        ``force_bound``, ``min_slide``, ``density``, ``gravity``, ``frame``.
+    timings : dict
+        Seconds for ``contacts``, ``build``, ``milp`` (all MILPs), ``lp`` (all exact checks and SLSQP) and,
+        when it ran, ``ipopt``.
+    """
+
+    status: str
+    forces: np.ndarray
+    motion: np.ndarray
+    free: np.ndarray
+    closed: np.ndarray
+    sliding: np.ndarray
+    points: np.ndarray
+    vertex_contact: np.ndarray
+    message: str
+    contacts: tuple = field(repr=False)
+    parameters: dict = field(default_factory=dict)
+    timings: dict = field(default_factory=dict)
+
+    @property
+    def stable(self) -> bool | None:
+        return {"stable": True, "unstable": False}.get(self.status)
+
+    def __str__(self) -> str:
+        p = self.parameters
+        return (f"CRA {self.status} (mu {p.get('mu')}, {p.get('cone')} cone with {p.get('sides')} sides, "
+                f"eta/eps {p.get('eta') / p.get('eps'):.3g}): {self.message}; {sum(self.timings.values()):.3g} s")
+
+    def to_dict(self) -> dict:
+        """JSON-serialisable summary."""
+        return {"status": self.status, "stable": self.stable, "message": self.message,
+                "forces": np.nan_to_num(self.forces, nan=0.0).tolist(),
+                "motion": np.nan_to_num(self.motion, nan=0.0).tolist(), "free": self.free.tolist(),
+                "closed": self.closed.tolist(), "vertex_contact": self.vertex_contact.tolist(),
+                "contacts": [(c.i, c.j) for c in self.contacts],
+                "parameters": {k: (json_float(v) if isinstance(v, float) else v) for k, v in self.parameters.items()},
+                "timings": dict(self.timings)}
+
+
+def cra(assembly, mu: float, density: float = 1.0, gravity=(0.0, 0.0, -1.0), frame=None, cone: str = "paper",
+        sides: int = DEFAULT_SIDES, eps: float = DEFAULT_EPS, eta: float = DEFAULT_ETA,
+        sectors: int = DEFAULT_SECTORS, force_bound: float = DEFAULT_FORCE_BOUND,
+        min_slide: float = DEFAULT_MIN_SLIDE, time_limit: float = DEFAULT_TIME_LIMIT, contacts=None,
+        backend: str = "milp") -> CRAResult:
+    """Coupled rigid-block analysis: is there an equilibrium that a virtual motion realises? (CRA paper, (11)).
+
+    Forces ``f`` at the contact vertices and a virtual motion ``dq`` of the
+    free blocks with relative vertex displacements ``dd = A_eq^T dq`` (Eq. (8)) must satisfy
+
+    - equilibrium and the linearised friction cone, as in :func:`~interlock.verify.statics.rbe`
+      (Eqs. (7b)-(7d)): ``A_eq f = -p``, ``A_fr f <= 0``, ``f_n >= 0``;
+    - contact, Eq. (10): ``f_n (dd_n + eps) = 0`` with ``dd_n + eps >= 0``;
+    - friction against the slide, Eq. (9): ``f_t = -alpha dd_t``, ``alpha >= 0``;
+    - ``|dd| <= eta`` componentwise.
+
+    The paper minimises ``|f_n|^2 + |alpha|^2`` locally; here the question
+    "does (11) have a solution?" is decided globally by a MILP relaxation and
+    an exact LP check at its motion (see the module docstring), and the forces
+    reported minimise ``sum f_n`` for that motion.
+
+    Parameters
+    ----------
+    assembly, mu, density, gravity, frame, cone, sides, contacts
+        As for :func:`~interlock.verify.statics.rbe`.
+    eps, eta : float
+        Overlap and displacement bound as fractions of ``assembly.scale``; ``0 < eps < eta``.  Only
+        ``eta / eps`` changes the verdict.
+    sectors : int
+        Angular sectors (``>= 3``) of the first MILP; :data:`REFINED_SECTORS` follow if needed.
+    force_bound : float
+        Largest vertex normal force in units of the free blocks' total weight.  The MILP's big M is
+        the smaller of this and the virtual-work bound (the work the load can do on any allowed
+        motion, which (11) implies), so with the default the bound rarely matters.
+    min_slide : float
+        Smallest slide of a friction-carrying vertex, as a fraction of ``eps``.
+    time_limit : float
+        Seconds per MILP; a MILP that runs out of time gives "inconclusive".
+    backend : {"milp", "compas_cra"}
+        "milp" decides as above.  "compas_cra" (the optional upstream package, for assemblies too
+        large for the MILP) asks its local solver for a motion and verifies it with the exact LP:
+        "stable" if the LP accepts it, otherwise "inconclusive" (a local solver that finds nothing
+        proves nothing).
+
+    Returns
+    -------
+    CRAResult
+
+    Raises
+    ------
+    StabilityError
+        Bad parameters (as for ``rbe``, and ``eps``, ``eta``, ``sectors``, ``force_bound``,
+        ``min_slide``, ``time_limit``).
+
+    Examples
+    --------
+    A block between two fixed walls: RBE holds it by prestress, CRA does not
+    (model H, Sec. 2.2), unless the walls lean inwards (wedging).
+
+    >>> import trimesh
+    >>> from interlock.blocks import Assembly
+    >>> from interlock.verify.statics import rbe
+    >>> walls = [trimesh.creation.box(bounds=b) for b in ([[-1, 0, 0], [0, 1, 2]], [[1, 0, 0], [2, 1, 2]])]
+    >>> middle = trimesh.creation.box(bounds=[[0, 0, 1], [1, 1, 2]])
+    >>> h = Assembly.from_meshes(walls + [middle], frame=[0, 1])
+    >>> rbe(h, mu=0.84).stable, cra(h, mu=0.84).status
+    (True, 'unstable')
+    """
+    problem = CRAProblem.build(assembly, mu, density, frame, cone, sides, eps, eta, force_bound, min_slide, contacts)
+    gravity, sectors, time_limit = gravity_vector(gravity), _sector_count(sectors), positive("time_limit", time_limit)
+    if backend == "compas_cra":
+        return problem.check_upstream(assembly, gravity)
+    if backend != "milp":
+        raise StabilityError(f"backend must be 'milp' or 'compas_cra', got {backend!r}")
+    return problem.solve(gravity, sectors, time_limit)
+
+
+def decider(assembly, mu: float, sectors: int = DEFAULT_SECTORS, time_limit: float = DEFAULT_TIME_LIMIT,
+            **options):
+    """``gravity -> True | False | None``: :func:`cra`'s verdict under many loads, with contacts and matrices
+    built once (for :func:`~interlock.verify.statics.critical_tilt`); ``options`` as for :func:`cra`.
+
+    The motions of earlier stable loads are tried first (a tilt scan moves the load a little at a time).
+    """
+    problem = CRAProblem.build(assembly, mu, **options)
+    sectors, time_limit = _sector_count(sectors), positive("time_limit", time_limit)
+    known: list[np.ndarray] = []
+
+    def stable(gravity) -> bool | None:
+        result = problem.solve(gravity_vector(gravity), sectors, time_limit, known)
+        if result.stable:
+            known.insert(0, problem.internal_motion(result.motion))
+            del known[WARM_STARTS:]
+        return result.stable
+
+    return stable
+
+
+def _sector_count(sectors) -> int:
+    if isinstance(sectors, bool) or not isinstance(sectors, (int, np.integer)) or sectors < 3:
+        raise StabilityError(f"sectors must be an integer >= 3, got {sectors!r}")
+    return int(sectors)
+
+
+@dataclass(frozen=True, eq=False)
+class CRAProblem:
+    """The CRA problem of one assembly, without gravity (which only changes the equilibrium's right-hand side)."""
+
+    system: EquilibriumSystem
+    kinematic: sp.csr_matrix  # D = A_eq^T, rows (n, u, v) per vertex, motion in units of eps
+    ratio: float  # eta / eps
+    force_bound: float
+    min_slide: float
+    parameters: dict
+
+    @classmethod
+    def build(cls, assembly, mu, density=1.0, frame=None, cone="paper", sides=DEFAULT_SIDES, eps=DEFAULT_EPS,
+              eta=DEFAULT_ETA, force_bound=DEFAULT_FORCE_BOUND, min_slide=DEFAULT_MIN_SLIDE, contacts=None):
+        system = EquilibriumSystem.build(assembly, mu, density, frame, cone, sides, contacts)
+        eps, eta = positive("eps", eps), positive("eta", eta)
+        if not eps < eta:
+            raise StabilityError(f"eps (overlap) must be smaller than eta (displacement bound), got {eps} >= {eta}")
+        force_bound, min_slide = positive("force_bound", force_bound), positive("min_slide", min_slide)
+        if not min_slide < eta / eps:
+            raise StabilityError(f"min_slide must be below eta / eps = {eta / eps:.3g}, got {min_slide}")
+        parameters = {**system.parameters, "eps": eps, "eta": eta, "eps_absolute": eps * assembly.scale,
+                      "eta_absolute": eta * assembly.scale, "force_bound": force_bound, "min_slide": min_slide,
+                      "length": assembly.scale}
+        return cls(system, system.a_eq.T.tocsr(), eta / eps, force_bound, min_slide, parameters)
+
+    # --- the whole decision -----------------------------------------------------------------------------------
+
+    def solve(self, gravity: np.ndarray, sectors: int, time_limit: float, known=()) -> CRAResult:
+        timings = {**self.system.timings, "milp": 0.0, "lp": 0.0}
+        b_eq, total = self._right_hand_side(gravity)
+        tried, message, status = [], "", "inconclusive"
+        started = time.perf_counter()
+        rbe_forces, status_rbe, _, _ = self.system.solve_lp(gravity, least_force=True)
+        if status_rbe == 0 and rbe_forces is None:  # nothing to carry (no free block touches anything)
+            rbe_forces = np.zeros(0)
+        work, most_work = self._most_work(b_eq) if status_rbe == 0 else (np.inf, None)
+        quick = self._quick(b_eq, rbe_forces if status_rbe == 0 else None, known, most_work)
+        timings["lp"] += time.perf_counter() - started
+        if quick is not None:
+            status, forces, motion, message = quick
+            parameters = {**self.parameters, "sectors": tried, "gravity": gravity.tolist()}
+            return self._result(status, message, forces * total if status == "stable" else None, motion,
+                                parameters, timings)
+        local = None  # (found, how) of the local solvers, once run
+        binaries = len(self.system.points) * (1 + sectors)
+        if binaries > LOCAL_FIRST_BINARIES:  # a MILP this large rarely decides in time: local solvers first
+            local = self._local(b_eq, rbe_forces, most_work, timings)
+            if local[0] is not None:
+                motion, forces = local[0]
+                message = (f"equilibrium realised by a virtual motion, found by {local[1]} (tried before the MILP, "
+                           f"which has {binaries} binaries)")
+                parameters = {**self.parameters, "sectors": tried, "gravity": gravity.tolist()}
+                return self._result("stable", message, forces * total, motion, parameters, timings)
+        started = time.perf_counter()
+        force_bounds = self._force_bounds(b_eq, work)  # the big Ms of every MILP below
+        timings["milp"] += time.perf_counter() - started
+        for count in (sectors,) + tuple(s for s in REFINED_SECTORS if s > sectors):
+            tried.append(count)
+            started = time.perf_counter()
+            outcome = self._milp(b_eq, force_bounds, count, time_limit)
+            if outcome is None:  # an infeasibility claim is checked on a looser formulation (floating point)
+                outcome = self._milp(b_eq, force_bounds, count, time_limit, tightened=False)
+            timings["milp"] += time.perf_counter() - started
+            if outcome is None:
+                status, message = "unstable", (f"no motion realises an equilibrium (MILP with {count} sectors "
+                                               f"infeasible, with and without the cuts)")
+                break
+            if isinstance(outcome, str):
+                message = outcome
+                break
+            forces, motion = outcome
+            started = time.perf_counter()
+            exact = self.exact(b_eq, motion)
+            for repair in (lambda f: cra_local.realise(self, f), lambda f: cra_local.polish(self, b_eq, f, motion)):
+                if exact is not None:
+                    break
+                repaired = repair(forces)
+                exact = None if repaired is None else self.exact(b_eq, repaired)
+                motion = motion if repaired is None else repaired
+            timings["lp"] += time.perf_counter() - started
+            if exact is not None:
+                status, message = "stable", f"equilibrium realised by a virtual motion ({count} sectors)"
+                forces = exact
+                break
+            message = f"the MILP's motions could not be made exact with up to {count} sectors"
+        if status == "inconclusive":  # last resort: local solves of (11), checked by the exact LP
+            found, how = local if local is not None else self._local(b_eq, rbe_forces, most_work, timings)
+            if found is not None:
+                status, (motion, forces) = "stable", found
+                message = (f"equilibrium realised by a virtual motion, found by {how} (the MILP did not decide: "
+                           f"{message})")
+            else:
+                message += f"; {how}"
+        parameters = {**self.parameters, "sectors": tried, "gravity": gravity.tolist()}
+        return self._result(status, message, forces * total if status == "stable" else None,
+                            motion if status == "stable" else None, parameters, timings)
+
+    def _local(self, b_eq, rbe_forces, most_work, timings):
+        """:func:`~interlock.verify.statics.cra_local.last_resort`, timed (``lp`` for SLSQP and the checks, ``ipopt``)."""
+        started = time.perf_counter()
+        found = cra_local.last_resort(self, b_eq, rbe_forces.reshape(-1, 3), most_work, timings)
+        timings["lp"] += time.perf_counter() - started - timings.get("ipopt", 0.0)
+        return found
+
+    def _quick(self, b_eq, rbe_forces, known=(), most_work=None):
+        """Decide quickly where possible: no RBE equilibrium (``rbe_forces`` None) means "unstable" (CRA only
+        removes solutions); a motion that realises an equilibrium exactly means "stable".  Tried in turn: a
+        known motion (``known``, e.g. of a nearby load), the allowed motion on which the load does the most work
+        (``most_work``: a block pushed into its seat), one realising the least-friction equilibrium
+        (:func:`~interlock.verify.statics.cra_local.least_friction`) and one realising RBE's least-force equilibrium.
+        ``None`` otherwise."""
+        if rbe_forces is None:
+            return "unstable", None, None, "RBE has no equilibrium, so no motion can realise one"
+        forces = rbe_forces.reshape(-1, 3)
+        candidates = [(lambda m=m: m, "the motion of a nearby load") for m in known]
+        candidates += [(lambda: most_work, "the motion of most work"),
+                       (lambda: cra_local.realise_least_friction(self, b_eq),
+                        "a motion realising the least-friction equilibrium"),
+                       (lambda: cra_local.realise(self, forces), "a motion realising RBE's least-force equilibrium")]
+        candidates += [(lambda m=m: cra_local.polish(self, b_eq, forces, m),
+                        "a local solve from the motion of a nearby load") for m in known]
+        for candidate, how in candidates:
+            motion = candidate()
+            exact = None if motion is None else self.exact(b_eq, motion)
+            if exact is not None:
+                return "stable", exact, motion, f"equilibrium realised by {how}"
+        return None
+
+    def internal_motion(self, world: np.ndarray) -> np.ndarray:
+        """World twists ``(t, omega)`` per free block (as in :attr:`CRAResult.motion`) in the solver's units:
+        lengths over ``eps``, rotations times the model size over ``eps``, flattened."""
+        eps, length = self.parameters["eps_absolute"], self.parameters["length"]
+        return np.hstack([world[:, :3], world[:, 3:] * length]).ravel() / eps
+
+    def _right_hand_side(self, gravity: np.ndarray):
+        """``-p / W`` of Eq. (7b) for this gravity, and the total weight ``W``."""
+        load = np.outer(self.system.weights, gravity)
+        total = float(np.abs(load).sum()) or 1.0
+        return -np.hstack([load, self.system.arms]).ravel() / total, total
+
+    def check_upstream(self, assembly, gravity: np.ndarray) -> CRAResult:
+        """Verify the motion of compas_cra's local solver with the exact LP (``backend="compas_cra"``)."""
+        timings = {**self.system.timings, "milp": 0.0, "lp": 0.0}
+        started = time.perf_counter()
+        p = self.parameters
+        solution = upstream_solution(assembly, p["mu"], gravity=gravity, density=p["density"], frame=p["frame"],
+                                     eps=p["eps"], eta=p["eta"], contacts=self.system.contacts)
+        timings["compas_cra"] = time.perf_counter() - started
+        parameters = {**p, "sectors": [], "gravity": gravity.tolist(), "backend": "compas_cra"}
+        if solution is None:
+            return self._result("inconclusive", "compas_cra's local solver found no solution (which proves "
+                                "nothing)", None, None, parameters, timings)
+        world, upstream_forces = (np.asarray(part, dtype=float) for part in solution)
+        world = world.reshape(-1, 6)
+        motion = self.internal_motion(world)
+        b_eq, total = self._right_hand_side(gravity)
+        started = time.perf_counter()
+        found = cra_local.verify_local(self, b_eq, motion, upstream_forces)
+        timings["lp"] = time.perf_counter() - started
+        if found is None:
+            return self._result("inconclusive", "compas_cra's motion does not realise an equilibrium exactly",
+                                None, None, parameters, timings)
+        motion, exact = found
+        return self._result("stable", "equilibrium realised by compas_cra's motion (verified exactly)",
+                            exact * total, motion, parameters, timings)
+
+    # --- MILP relaxation --------------------------------------------------------------------------------------
+
+    @cached_property
+    def allowed_motions(self) -> tuple[sp.csr_matrix, np.ndarray]:
+        """``(A, b)`` with ``A q <= b`` exactly when ``dd_n >= -eps`` and ``|dd| <= eta`` (eps = 1)."""
+        d = self.kinematic
+        s = d.shape[0] // 3
+        return (sp.vstack([d, -d], format="csr"),
+                np.concatenate([np.full(3 * s, self.ratio), np.tile([1.0, self.ratio, self.ratio], s)]))
+
+    @cached_property
+    def _reach(self) -> np.ndarray:
+        """Per vertex ``(max dd_n + eps, max |dd_t|)`` over the allowed motions (the MILP's big Ms), eps = 1.
+
+        ``dd_n`` by an LP per vertex (the geometry often keeps it far below ``eta``, e.g. between two walls);
+        ``|dd_t| <= sqrt(2) eta`` from the bound on each component, which LPs do not improve in practice.
+        """
+        d = self.kinematic
+        s = d.shape[0] // 3
+        a_ub, b_ub = self.allowed_motions
+        normal = np.full(s, self.ratio)
+        for v in range(s):
+            outcome = linprog(-d[3 * v].toarray().ravel(), A_ub=a_ub, b_ub=b_ub, bounds=(None, None), method="highs")
+            if outcome.status == 0:
+                normal[v] = -outcome.fun
+        normal = normal * (1 + BOUND_MARGIN) + BOUND_MARGIN + 1.0
+        return np.column_stack([normal, np.full(s, math.hypot(self.ratio, self.ratio) * (1 + BOUND_MARGIN))])
+
+    @cached_property
+    def _diagonals(self) -> np.ndarray:
+        """Rows ``(a, c, b)`` of vertex indices with ``z_a + z_c - z_b <= 1``: the MILP's face cuts.
+
+        ``dd_n`` is affine over a contact polygon and ``>= -eps`` at its
+        vertices, so the vertices where it equals ``-eps`` span a face of the
+        polygon (a vertex, an edge or all of it) when the polygon is convex.
+        Two closed vertices whose diagonal crosses the interior close them all.
+        """
+        triples, start = [], 0
+        for contact in self.system.contacts:
+            count, polygon = len(contact.vertices), contact.polygon
+            convex = not polygon.interiors and abs(polygon.convex_hull.area - polygon.area) <= 1e-9 * polygon.area
+            if convex and count >= 4:
+                ring = (contact.vertices - contact.origin) @ contact.basis.T
+                inner = polygon.buffer(-1e-6 * math.sqrt(polygon.area))
+                for a in range(count):
+                    for c in range(a + 2, count - (a == 0)):
+                        if inner.contains(shapely.Point((ring[a] + ring[c]) / 2)):
+                            triples += [(start + a, start + c, start + b) for b in range(count) if b not in (a, c)]
+            start += count
+        return np.array(triples, dtype=int).reshape(-1, 3)
+
+    def _most_work(self, b_eq):
+        """``(bound, motion)``: the most work ``-b.q`` the load can do on an allowed motion (``dd_n >= -eps``,
+        ``|dd| <= eta``), with margin, and a motion doing it (``None`` if the LP fails).
+
+        By virtual work, ``-b.q = sum f_n + sum alpha |dd_t|^2`` (eps = 1) for
+        every solution of (11), so the bound caps the sum of its normal forces;
+        and the motion itself often realises an equilibrium (a block pushed
+        into its seat closes every contact), which :meth:`_quick` tries.
+        """
+        a_ub, b_ub = self.allowed_motions
+        outcome = linprog(b_eq, A_ub=a_ub, b_ub=b_ub, bounds=(None, None), method="highs")
+        if outcome.status != 0:
+            return np.inf, None
+        return -outcome.fun * (1 + BOUND_MARGIN) + BOUND_MARGIN, outcome.x
+
+    def _force_bounds(self, b_eq, work: float):
+        """Per vertex, the largest ``f_n`` of any RBE equilibrium whose normal forces sum to at most
+        ``work`` (:meth:`_most_work`), capped at ``force_bound`` (the MILP's big M)."""
+        system = self.system
+        s = len(system.points)
+        cap = min(self.force_bound, work)
+        bounds = np.full(s, cap)
+        box = system.bounds.copy()
+        box[0::3, 1] = cap
+        total = sp.csr_matrix(np.tile([1.0, 0.0, 0.0], s))
+        a_ub = sp.vstack([system.a_ub, total], format="csr")
+        b_ub = np.concatenate([np.zeros(system.a_ub.shape[0]), [cap]])
+        for v in range(s):
+            cost = np.zeros(3 * s)
+            cost[3 * v] = -1.0
+            outcome = linprog(cost, A_ub=a_ub, b_ub=b_ub, A_eq=system.a_eq, b_eq=b_eq, bounds=box, method="highs")
+            if outcome.status == 0:
+                bounds[v] = min(cap, -outcome.fun * (1 + BOUND_MARGIN) + BOUND_MARGIN)
+        return bounds
+
+    def _milp(self, b_eq, force_bounds, sectors, time_limit, tightened: bool = True):
+        """Forces and motion of the relaxation, ``None`` if infeasible, or a message if HiGHS did not decide.
+
+        ``force_bounds`` are :meth:`_force_bounds` for this load, the big Ms of ``f_n``.
+
+        Beside Eqs. (9)-(10) with big Ms, three families of rows hold for every solution of (11) and
+        tighten the relaxation (``tightened``): the virtual-work row ``b.q + sum f_n <= 0``, friction
+        only at closed vertices, and the face cuts of :attr:`_diagonals`.  Without them, and with the big
+        Ms :data:`LOOSE` times larger, the MILP is a second, numerically different route to the same
+        answer, which :meth:`solve` asks before it calls an assembly unstable.
+        """
+        system, d = self.system, self.kinematic
+        s, free = len(system.points), system.a_eq.shape[0]
+        if s == 0:
+            return None if not np.allclose(b_eq, 0.0) else (np.zeros((0, 3)), np.zeros(free))
+        n_f, n_q, n_z, n_s = 3 * s, free, s, s * sectors
+        size = n_f + n_q + n_z + n_s
+        of, oq, oz, os_ = 0, n_f, n_f + n_q, n_f + n_q + n_z
+        ratio = self.ratio
+        mu_c = -system.cone_rows[0, 0] / math.cos(math.pi / len(system.cone_rows))  # the pyramid's widest |f_t| / f_n
+        loose = 1.0 if tightened else LOOSE
+        force_bounds = force_bounds * loose
+        big_t = np.maximum(mu_c * force_bounds, 1e-9)
+        big_n, big_d = self._reach[:, 0] * loose, self._reach[:, 1] * loose + self.min_slide
+        d_n, d_u, d_v = d[0::3], d[1::3], d[2::3]
+        vertices = np.arange(s)
+        rows = []  # (matrix over x, lower, upper)
+
+        def columns(block, offset):
+            block = sp.csr_matrix(block)
+            return sp.hstack([sp.csr_matrix((block.shape[0], offset)), block,
+                              sp.csr_matrix((block.shape[0], size - offset - block.shape[1]))], format="csr")
+
+        def select(offset, component, scale=1.0, stride=3):
+            # one row per vertex v: scale_v * x[offset + stride v + component]
+            return sp.csr_matrix((np.broadcast_to(scale, s), (vertices, offset + stride * vertices + component)),
+                                 shape=(s, size))
+
+        rows.append((columns(system.a_eq, of), b_eq, b_eq))
+        rows.append((columns(system.a_ub, of), -np.inf, 0.0))
+        rows.append((select(of, 0) - select(oz, 0, force_bounds, 1), -np.inf, 0.0))  # f_n <= M_v z
+        rows.append((columns(d_n, oq) + select(oz, 0, big_n, 1), -np.inf, big_n - 1.0))  # dd_n + 1 <= M_v (1 - z)
+        angles = 2.0 * math.pi * np.arange(sectors + 1) / sectors
+        edge = np.column_stack([np.cos(angles), np.sin(angles)])
+        middle = np.column_stack([np.cos(angles[:-1] + math.pi / sectors), np.sin(angles[:-1] + math.pi / sectors)])
+        one_sector = sp.csr_matrix((np.ones(n_s), (np.repeat(vertices, sectors), os_ + np.arange(n_s))),
+                                   shape=(s, size))
+        if tightened:
+            # virtual work: b.q = f.dd = -sum f_n - sum alpha |dd_t|^2 <= -sum f_n for any solution of (11)
+            work = np.zeros(size)
+            work[oq:oq + n_q], work[of:of + n_f:3] = b_eq, 1.0
+            rows.append((sp.csr_matrix(work), -np.inf, BOUND_MARGIN))
+            rows.append((one_sector - select(oz, 0, 1.0, 1), -np.inf, 0.0))  # friction only where closed
+            cuts = self._diagonals
+            if len(cuts):
+                rows.append((sp.csr_matrix((np.tile([1.0, 1.0, -1.0], len(cuts)),
+                                            (np.repeat(np.arange(len(cuts)), 3), oz + cuts.ravel())),
+                                           shape=(len(cuts), size)), -np.inf, 1.0))
+        else:
+            rows.append((one_sector, -np.inf, 1.0))
+        no_sector = sp.diags(big_t) @ one_sector
+        for component in (1, 2):  # no sector, no friction
+            rows.append((select(of, component) - no_sector, -np.inf, 0.0))
+            rows.append((select(of, component) + no_sector, 0.0, np.inf))
+        for k in range(sectors):
+            a, b, g = edge[k], edge[k + 1], middle[k]
+            slide_a = columns(a[0] * d_v - a[1] * d_u, oq)  # a x dd_t >= 0 in the sector
+            slide_b = columns(b[1] * d_u - b[0] * d_v, oq)  # dd_t x b >= 0
+            force_a = select(of, 1, a[1]) - select(of, 2, a[0])  # a x (-f_t) >= 0
+            force_b = select(of, 2, b[0]) - select(of, 1, b[1])  # (-f_t) x b >= 0
+            along = columns(g[0] * d_u + g[1] * d_v, oq)  # g . dd_t >= min_slide
+            rows.append((slide_a - select(os_, k, big_d, sectors), -big_d, np.inf))
+            rows.append((slide_b - select(os_, k, big_d, sectors), -big_d, np.inf))
+            rows.append((force_a - select(os_, k, big_t, sectors), -big_t, np.inf))
+            rows.append((force_b - select(os_, k, big_t, sectors), -big_t, np.inf))
+            rows.append((along - select(os_, k, self.min_slide + big_d, sectors), -big_d, np.inf))
+        matrix = sp.vstack([r[0] for r in rows], format="csr")
+        lower = np.concatenate([np.broadcast_to(r[1], r[0].shape[0]) for r in rows])
+        upper = np.concatenate([np.broadcast_to(r[2], r[0].shape[0]) for r in rows])
+        low = np.concatenate([np.tile([0.0, -np.inf, -np.inf], s), np.full(n_q, -np.inf), np.zeros(n_z + n_s)])
+        high = np.concatenate([np.column_stack([force_bounds, np.full((s, 2), np.inf)]).ravel(), np.full(n_q, np.inf),
+                               np.ones(n_z + n_s)])
+        motion_rows = columns(d, oq)  # |dd| <= eta, dd_n >= -eps
+        motion_low = np.tile([-1.0, -ratio, -ratio], s)
+        integrality = np.concatenate([np.zeros(n_f + n_q), np.ones(n_z + n_s)])
+        outcome = milp(np.zeros(size), integrality=integrality, bounds=Bounds(low, high),
+                       constraints=[LinearConstraint(matrix, lower, upper),
+                                    LinearConstraint(motion_rows, motion_low, np.full(3 * s, ratio))],
+                       options={"time_limit": time_limit, "presolve": True})
+        if outcome.status == 2:
+            return None
+        if outcome.x is None:
+            return (f"the exact route is too large for this model: HiGHS did not decide the MILP "
+                    f"({n_z + n_s} binaries) within time_limit = {time_limit:g} s ({outcome.message})")
+        x = outcome.x
+        return x[of:of + n_f].reshape(-1, 3), x[oq:oq + n_q]
+
+    # --- exact checks -----------------------------------------------------------------------------------------
+
+    def exact(self, b_eq, motion):
+        """Forces solving (11) for this motion (least ``sum f_n``), or ``None``: an LP in ``(f_n, alpha)``."""
+        system = self.system
+        dd = (self.kinematic @ motion).reshape(-1, 3)
+        closed = dd[:, 0] + 1.0 <= ACTIVE_TOL
+        slide = dd[:, 1:]
+        sliding = closed & (np.hypot(slide[:, 0], slide[:, 1]) > SLIDE_TOL)
+        if np.any(dd[:, 0] < -1.0 - 1e-6) or np.any(np.abs(dd) > self.ratio * (1 + 1e-6)) or not closed.any():
+            return None
+        normal_columns = system.a_eq[:, 0::3][:, closed]
+        slide_columns = (-(system.a_eq[:, 1::3] @ sp.diags(slide[:, 0]))
+                         - (system.a_eq[:, 2::3] @ sp.diags(slide[:, 1])))[:, sliding]
+        a_eq = sp.hstack([normal_columns, slide_columns], format="csr")
+        # per sliding vertex and cone row k: -m f_n + alpha (-(cos a_k) dd_u - (sin a_k) dd_v) <= 0
+        cone_rows = system.cone_rows
+        sides = len(cone_rows)
+        n_closed, n_sliding = int(closed.sum()), int(sliding.sum())
+        which = np.flatnonzero(sliding)
+        row = np.arange(n_sliding * sides)
+        column_of_normal = np.repeat((np.cumsum(closed) - 1)[which], sides)
+        normal_part = sp.csr_matrix((np.tile(cone_rows[:, 0], n_sliding), (row, column_of_normal)),
+                                    shape=(len(row), n_closed))
+        alpha_values = -(slide[which] @ cone_rows[:, 1:].T).ravel()
+        alpha_part = sp.csr_matrix((alpha_values, (row, np.repeat(np.arange(n_sliding), sides))),
+                                   shape=(len(row), n_sliding))
+        a_ub = sp.hstack([normal_part, alpha_part], format="csr")
+        cost = np.concatenate([np.ones(n_closed), np.zeros(n_sliding)])
+        outcome = linprog(cost, A_ub=a_ub, b_ub=np.zeros(a_ub.shape[0]),
+                          A_eq=a_eq, b_eq=b_eq, bounds=(0, None), method="highs")
+        if outcome.status != 0:
+            return None
+        x = np.maximum(outcome.x, 0.0)  # HiGHS may return -1e-11 for a bound of 0
+        forces = np.zeros((len(dd), 3))
+        forces[closed, 0] = x[:n_closed]
+        alpha = x[n_closed:]
+        forces[sliding, 1:] = -alpha[:, None] * slide[sliding]
+        return forces
+
+    # --- the result -------------------------------------------------------------------------------------------
+
+    def _result(self, status, message, forces, motion, parameters, timings) -> CRAResult:
+        system = self.system
+        s, free = len(system.points), len(system.free)
+        eps_absolute = parameters["eps_absolute"]
+        if motion is None:
+            world_motion = np.full((free, 6), np.nan)
+            dd = np.full((s, 3), np.nan)
+        else:
+            twists = motion.reshape(-1, 6)
+            world_motion = np.hstack([twists[:, :3], twists[:, 3:] / parameters["length"]]) * eps_absolute
+            dd = (self.kinematic @ motion).reshape(-1, 3)
+        closed = np.nan_to_num(dd[:, 0], nan=np.inf) + 1.0 <= ACTIVE_TOL
+        return CRAResult(status, forces if forces is not None else np.full((s, 3), np.nan), world_motion,
+                         system.free.copy(), closed, dd[:, 1:], system.points, system.vertex_contact, message,
+                         system.contacts, parameters, timings)

@@ -1,0 +1,348 @@
+"""The equilibrium problem that RBE and CRA share (CRA paper, Eqs. (1)-(5), App. B): its matrices and input checks.
+
+:class:`EquilibriumSystem` holds the LP of rigid-block equilibrium without its
+right-hand side (which gravity alone sets); :func:`~interlock.verify.statics.rbe.rbe`
+solves it once, :func:`~interlock.verify.statics.cra.cra` couples it with the
+blocks' motion.  The theory is in ``docs/statics.md``.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from numbers import Real
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.optimize import linprog
+
+from interlock.blocks.assembly import Assembly
+from interlock.errors import InterlockError
+from interlock.verify.contacts import contacts as find_contacts
+from interlock.verify.check import SOLVER_THREADS
+
+__all__ = ["StabilityError", "StabilityResult", "EquilibriumSystem", "equilibrium_matrix", "friction_block",
+           "friction_matrix", "friction_utilisation", "gravity_vector", "nonnegative", "positive",
+           "block_densities", "json_float", "CONES", "DEFAULT_SIDES", "LARGE_LP", "DEFAULT_EPS", "DEFAULT_ETA"]
+
+#: Linearised friction cones: "paper" circumscribes the Coulomb cone (App. B, faces tangent to it, so it
+#: allows up to 1/cos(pi/sides) more friction between its faces), "inner" is inscribed (conservative).
+CONES = ("paper", "inner")
+#: Sides of the friction pyramid (App. B: eight).
+DEFAULT_SIDES = 8
+#: Above this many force unknowns the LP goes to Clarabel (interior point) first, HiGHS if it does not decide.
+LARGE_LP = 5000
+#: CRA's overlap ``eps`` of a loaded contact vertex, as a fraction of the model size (paper: 1e-5 .. 1e-4 of the
+#: block dimension).
+DEFAULT_EPS = 1e-5
+#: Bound ``eta`` on every relative virtual displacement, as a fraction of the model size (paper: 1e-3 .. 1e-2).
+#: Only ``eta / eps`` changes the verdict: here 100.  Upstream compas_cra uses 10 (1e-4 and 1e-3 absolute);
+#: then a block closing two faces of a V groove slides at least 1.73 eps down them, so friction along the
+#: groove tilts by 10 degrees or more and type-a gives 20.7 instead of 21.8 degrees (Table 2).
+DEFAULT_ETA = 1e-3
+
+
+class StabilityError(InterlockError):
+    """Input that the stability analysis cannot work with."""
+
+
+@dataclass(frozen=True, eq=False)
+class StabilityResult:
+    """The outcome of :func:`rbe`.
+
+    Attributes
+    ----------
+    stable : bool
+        An equilibrium with compressive, friction-admissible contact forces exists (Eqs. (1), (2), (5)).
+    forces : ndarray (s, 3)
+        Per contact vertex ``(f_n, f_u, f_v)`` in the contact's frame ``(normal, basis[0], basis[1])``,
+        acting on block ``j`` (block ``i`` receives the opposite); NaN when unstable.
+    vertex_contact : ndarray of int (s,)
+        The contact (index into ``contacts``) of each row of ``forces``.
+    points : ndarray (s, 3)
+        The contact vertices where the forces act.
+    resultants : ndarray (c, 3)
+        Per contact, the sum of its vertex forces in world coordinates (on block ``j``).
+    centres_of_pressure : ndarray (c, 3)
+        Per contact, ``sum f_n p / sum f_n`` (NaN where ``sum f_n`` is 0).
+    friction_utilisation : float
+        ``max |f_t| / (mu f_n)`` over loaded vertices (0 when nothing slides, inf if friction is
+        needed with ``mu = 0``); NaN when unstable.
+    status : int
+        ``scipy.optimize.linprog`` status (0 solved, 2 infeasible).
+    message : str
+    contacts : tuple of Contact
+    parameters : dict
+        ``mu``, ``cone``, ``sides``, ``density``, ``gravity``, ``frame``.
+    timings : dict
+        Seconds spent on ``contacts``, ``build`` and ``solve``.
+    """
+
+    stable: bool
+    forces: np.ndarray
+    vertex_contact: np.ndarray
+    points: np.ndarray
+    resultants: np.ndarray
+    centres_of_pressure: np.ndarray
+    friction_utilisation: float
+    status: int
+    message: str
+    contacts: tuple = field(repr=False)
+    parameters: dict = field(default_factory=dict)
+    timings: dict = field(default_factory=dict)
+
+    def __str__(self) -> str:
+        verdict = "stable" if self.stable else "unstable"
+        p = self.parameters
+        extra = f", friction utilisation {self.friction_utilisation:.3g}" if self.stable else ""
+        return (f"RBE {verdict} (mu {p.get('mu')}, {p.get('cone')} cone with {p.get('sides')} sides): "
+                f"{len(self.contacts)} contacts, {len(self.forces)} vertex forces{extra}; "
+                f"{sum(self.timings.values()):.3g} s")
+
+    def to_dict(self) -> dict:
+        """JSON-serialisable summary (forces and resultants as lists)."""
+        return {"stable": self.stable, "status": self.status, "message": self.message,
+                "friction_utilisation": json_float(self.friction_utilisation),
+                "forces": np.nan_to_num(self.forces, nan=0.0).tolist(),
+                "vertex_contact": self.vertex_contact.tolist(),
+                "resultants": np.nan_to_num(self.resultants, nan=0.0).tolist(),
+                "contacts": [(c.i, c.j) for c in self.contacts],
+                "parameters": dict(self.parameters), "timings": dict(self.timings)}
+
+
+@dataclass(frozen=True, eq=False)
+class EquilibriumSystem:
+    """The LP of :func:`rbe` without its right-hand side (which gravity alone sets)."""
+
+    a_eq: sp.csr_matrix
+    a_ub: sp.csr_matrix
+    cone_rows: np.ndarray  # friction_block(mu, cone, sides): one vertex's rows of a_ub
+    cost: np.ndarray
+    bounds: np.ndarray
+    weights: np.ndarray
+    arms: np.ndarray
+    free: np.ndarray
+    frames: np.ndarray
+    points: np.ndarray
+    vertex_contact: np.ndarray
+    contacts: tuple
+    parameters: dict
+    timings: dict
+
+    @classmethod
+    def build(cls, assembly, mu, density, frame, cone, sides, contacts) -> EquilibriumSystem:
+        if not isinstance(assembly, Assembly):
+            raise StabilityError(f"expected an interlock Assembly, got {type(assembly).__name__}")
+        mu, density = nonnegative("mu", mu), block_densities(density, len(assembly))
+        if cone not in CONES:
+            raise StabilityError(f"cone must be one of {CONES}, got {cone!r}")
+        if isinstance(sides, bool) or not isinstance(sides, (int, np.integer)) or sides < (4 if cone == "paper" else 3):
+            raise StabilityError(f"sides must be an integer >= {4 if cone == 'paper' else 3}, got {sides!r}")
+        fixed = assembly.block_indices(assembly.frame if frame is None else frame, "frame")
+        if not fixed:
+            raise StabilityError("the assembly has no frame: give the fixed blocks (supports) with frame=[...] "
+                                 "or Assembly.with_frame; without supports nothing can carry the weight")
+        started = time.perf_counter()
+        found = find_contacts(assembly) if contacts is None else tuple(contacts)
+        found_at = time.perf_counter()
+        free = np.setdiff1d(np.arange(len(assembly)), fixed)
+        column_of = np.full(len(assembly), -1)
+        column_of[free] = np.arange(len(free))
+        used = tuple(c for c in found if column_of[c.i] >= 0 or column_of[c.j] >= 0)
+        counts = np.array([len(c.vertices) for c in used], dtype=int)
+        vertex_contact = np.repeat(np.arange(len(used)), counts)
+        points = np.vstack([c.vertices for c in used]) if used else np.empty((0, 3))
+        frames = np.array([[c.normal, c.basis[0], c.basis[1]] for c in used]).reshape(-1, 3, 3)[vertex_contact]
+        length = assembly.scale
+        a_eq = equilibrium_matrix(assembly, used, vertex_contact, points, frames, column_of, length)
+        cone_rows = friction_block(mu, cone, sides)
+        a_ub = friction_matrix(len(points), cone_rows)
+        weights = density[free] * assembly.volumes[free]
+        arms = np.zeros((len(free), 3))  # weight acts at the centroid: no moment about it
+        bounds = np.tile([[0.0, np.inf], [-np.inf, np.inf], [-np.inf, np.inf]], (len(points), 1))
+        cost = np.tile([1.0, 0.0, 0.0], len(points))
+        built = time.perf_counter()
+        uniform = bool(np.all(density == density[0])) if len(density) else True
+        parameters = {"mu": float(mu), "cone": cone, "sides": int(sides),
+                      "density": float(density[0]) if uniform and len(density) else density.tolist(),
+                      "frame": list(fixed)}
+        timings = {"contacts": found_at - started, "build": built - found_at}
+        return cls(a_eq, a_ub, cone_rows, cost, bounds, weights, arms, free, frames, points, vertex_contact, used,
+                   parameters, timings)
+
+    def solve_lp(self, gravity: np.ndarray, least_force: bool):
+        """HiGHS on ``A_eq f = -p / W``, ``A_fr f <= 0``, ``f_n >= 0`` (``W``: total weight).
+
+        With ``least_force`` the objective is ``sum f_n``; HiGHS's simplex sometimes stops undecided on
+        it (status 4 on the shelf), so the interior-point method and then the plain feasibility problem
+        (objective 0) are tried next.  Without it, only the feasibility problem is solved.
+        """
+        load = np.outer(self.weights, gravity)
+        total = float(np.abs(load).sum()) or 1.0
+        b_eq = -np.hstack([load, self.arms]).ravel() / total
+        if not self.a_eq.shape[1]:
+            solved = bool(np.allclose(b_eq, 0.0))
+            return None, (0 if solved else 2), ("no contact forces" if solved else "no contacts carry the load"), total
+        if self.a_eq.shape[1] > LARGE_LP:
+            decided = self._clarabel(b_eq, least_force)
+            if decided is not None:
+                return (*decided, total)
+        attempts = [(self.cost, "highs"), (self.cost, "highs-ipm")] if least_force else []
+        attempts.append((np.zeros_like(self.cost), "highs"))
+        for cost, method in attempts:
+            outcome = linprog(cost, A_ub=self.a_ub, b_ub=np.zeros(self.a_ub.shape[0]), A_eq=self.a_eq, b_eq=b_eq,
+                              bounds=self.bounds, method=method)
+            if outcome.status in (0, 2):
+                return outcome.x, int(outcome.status), str(outcome.message), total
+        raise StabilityError(f"HiGHS did not decide the RBE problem (status {outcome.status}: {outcome.message})")
+
+    def _clarabel(self, b_eq, least_force: bool):
+        """The same LP by Clarabel's interior point (large models: the armadillo's 31,000 unknowns in 0.7 s
+        against 40 s for HiGHS' simplex); ``(x, status, message)``, or ``None`` when it does not decide."""
+        import clarabel
+
+        n = self.a_eq.shape[1]
+        normal = np.flatnonzero(self.bounds[:, 0] == 0.0)
+        nonnegative = sp.csr_matrix((-np.ones(len(normal)), (np.arange(len(normal)), normal)), shape=(len(normal), n))
+        constraints = sp.vstack([self.a_eq, self.a_ub, nonnegative], format="csc")
+        right = np.concatenate([b_eq, np.zeros(self.a_ub.shape[0] + len(normal))])
+        settings = clarabel.DefaultSettings()
+        settings.verbose = False
+        settings.max_threads = SOLVER_THREADS
+        cones = [clarabel.ZeroConeT(self.a_eq.shape[0]), clarabel.NonnegativeConeT(self.a_ub.shape[0] + len(normal))]
+        cost = self.cost if least_force else np.zeros(n)
+        solution = clarabel.DefaultSolver(sp.csc_matrix((n, n)), cost, constraints, right, cones, settings).solve()
+        status = str(solution.status)
+        if status == "Solved":
+            return np.asarray(solution.x), 0, "Clarabel: solved"
+        if status == "PrimalInfeasible":
+            return None, 2, "Clarabel: infeasible (no equilibrium)"
+        return None
+
+    def feasible(self, gravity: np.ndarray) -> bool:
+        return self.solve_lp(gravity, least_force=False)[1] == 0
+
+    def solve(self, gravity: np.ndarray) -> StabilityResult:
+        started = time.perf_counter()
+        x, status, message, total = self.solve_lp(gravity, least_force=True)
+        timings = {**self.timings, "solve": time.perf_counter() - started}
+        parameters = {**self.parameters, "gravity": gravity.tolist()}
+        stable = status == 0
+        count = len(self.points)
+        if stable and x is not None:
+            forces = x.reshape(-1, 3) * total
+        else:
+            forces = np.full((count, 3), np.nan if not stable else 0.0)
+        world = np.einsum("sk,skd->sd", forces, self.frames)
+        resultants = np.zeros((len(self.contacts), 3))
+        np.add.at(resultants, self.vertex_contact, world)
+        normal_sum = np.zeros(len(self.contacts))
+        np.add.at(normal_sum, self.vertex_contact, forces[:, 0])
+        moments = np.zeros((len(self.contacts), 3))
+        np.add.at(moments, self.vertex_contact, forces[:, :1] * self.points)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            centres = np.where(normal_sum[:, None] > 0, moments / normal_sum[:, None], np.nan)
+        utilisation = friction_utilisation(forces, self.parameters["mu"]) if stable else math.nan
+        return StabilityResult(stable, forces, self.vertex_contact, self.points, resultants, centres, utilisation,
+                               status, message, self.contacts, parameters, timings)
+
+
+def equilibrium_matrix(assembly, used, vertex_contact, points, frames, column_of, length) -> sp.csr_matrix:
+    """``A_eq`` (Eq. (2)): rows ``6 k .. 6 k + 5`` = force and moment (over ``length``) on free block ``k``.
+
+    Column ``3 v + a`` is component ``a`` (n, u, v) of vertex ``v``; on block
+    ``j`` it contributes ``(e_a, r_j x e_a)``, on block ``i`` the negative with ``r_i``.
+    """
+    count = len(points)
+    if not count:
+        return sp.csr_matrix((6 * int((column_of >= 0).sum()), 0))
+    i = np.array([c.i for c in used])[vertex_contact]
+    j = np.array([c.j for c in used])[vertex_contact]
+    rows, cols, data = [], [], []
+    for blocks, sign in ((j, 1.0), (i, -1.0)):
+        on = column_of[blocks] >= 0
+        arm = (points[on] - assembly.centroids[blocks[on]]) / length
+        axes = frames[on]  # (m, 3 components, 3 coordinates)
+        values = sign * np.concatenate([axes, np.cross(arm[:, None, :], axes)], axis=2)  # (m, 3, 6)
+        vertex = np.flatnonzero(on)
+        rows.append((6 * column_of[blocks[on]][:, None, None] + np.arange(6)[None, None, :]).repeat(3, axis=1))
+        cols.append(np.broadcast_to((3 * vertex[:, None] + np.arange(3))[:, :, None], values.shape))
+        data.append(values)
+    matrix = sp.csr_matrix((np.concatenate([d.ravel() for d in data]),
+                            (np.concatenate([r.ravel() for r in rows]), np.concatenate([c.ravel() for c in cols]))),
+                           shape=(6 * int((column_of >= 0).sum()), 3 * count))
+    matrix.eliminate_zeros()
+    return matrix
+
+
+def friction_block(mu: float, cone: str, sides: int) -> np.ndarray:
+    """The rows ``(-m, cos a_k, sin a_k)`` of one vertex's linearised cone (Eq. (5), App. B), ``(sides, 3)``.
+
+    ``block @ (f_n, f_u, f_v) <= 0`` with ``a_k = 2 pi k / sides``, ``m = mu`` for the
+    circumscribed ("paper") pyramid and ``m = mu cos(pi / sides)`` for the inscribed ("inner") one.
+    """
+    bound = mu * (math.cos(math.pi / sides) if cone == "inner" else 1.0)
+    angles = 2.0 * math.pi * np.arange(sides) / sides
+    block = np.column_stack([np.full(sides, -bound), np.cos(angles), np.sin(angles)])
+    block[np.abs(block) < 1e-15] = 0.0
+    return block
+
+
+def friction_matrix(count: int, block: np.ndarray) -> sp.csr_matrix:
+    """``A_fr`` (Eq. (5), App. B): ``block`` (:func:`friction_block`) once per vertex."""
+    return sp.kron(sp.eye(count, format="csr"), sp.csr_matrix(block), format="csr")
+
+
+def friction_utilisation(forces: np.ndarray, mu: float) -> float:
+    tangential = np.hypot(forces[:, 1], forces[:, 2])
+    normal = forces[:, 0]
+    scale = max(float(np.abs(forces).max(initial=0.0)), 1e-300)
+    loaded = tangential > 1e-9 * scale
+    if not loaded.any():
+        return 0.0
+    if mu == 0.0:
+        return math.inf
+    with np.errstate(divide="ignore"):
+        return float(np.max(tangential[loaded] / (mu * normal[loaded])))
+
+
+def gravity_vector(gravity) -> np.ndarray:
+    try:
+        g = np.asarray(gravity, dtype=float)
+    except (TypeError, ValueError):
+        raise StabilityError(f"gravity must be a 3-vector of numbers, got {gravity!r}") from None
+    if g.shape != (3,) or not np.all(np.isfinite(g)):
+        raise StabilityError(f"gravity must be a finite 3-vector, got {g.tolist()}")
+    if not np.linalg.norm(g) > 0:
+        raise StabilityError("gravity is zero: give its direction and magnitude, e.g. (0, 0, -1)")
+    return g
+
+
+def nonnegative(name: str, value) -> float:
+    if isinstance(value, bool) or not isinstance(value, Real) or not math.isfinite(value) or value < 0:
+        raise StabilityError(f"{name} must be a finite number >= 0, got {value!r}")
+    return float(value)
+
+
+def positive(name: str, value) -> float:
+    if isinstance(value, bool) or not isinstance(value, Real) or not math.isfinite(value) or value <= 0:
+        raise StabilityError(f"{name} must be a finite number > 0, got {value!r}")
+    return float(value)
+
+
+def block_densities(density, count: int) -> np.ndarray:
+    if np.ndim(density) == 0:
+        return np.full(count, positive("density", density))
+    try:
+        values = np.asarray(density, dtype=float)
+    except (TypeError, ValueError):
+        raise StabilityError(f"density must be a number or one number per block, got {density!r}") from None
+    if values.shape != (count,) or not np.all(np.isfinite(values)) or not np.all(values > 0):
+        raise StabilityError(f"density must be > 0 and finite, one value or {count} (one per block); "
+                             f"got shape {values.shape}")
+    return values
+
+
+def json_float(value: float):
+    return value if math.isfinite(value) else str(value)
