@@ -82,8 +82,8 @@ def criterion_4_3(block_or_group, deformed_edges=None) -> CriterionResult:
     ``H(F) = H(F')``.  The tiles reachable from ``F`` across deformed edges
     are ``S(F)`` with ``S = <g_e : e deformed>`` (``g(F)`` and ``g g_e(F)``
     meet along ``g(e)``), so a finite union of tiles bounded by undeformed
-    edges only exists iff ``S`` is finite (docs/criterion.md, "Criterion 4.3
-    made finite").  Finite subgroups of a wallpaper group have order at most 12,
+    edges only exists iff ``S`` is finite (docs/criterion.md, "From unions of tiles
+    to a subgroup").  Finite subgroups of a wallpaper group have order at most 12,
     so a closure of ``S`` that passes 12 elements proves the criterion; a
     closed ``S`` is the witness ``H``.  Exact arithmetic throughout.
 
