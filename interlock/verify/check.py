@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import math
 import time
 from contextlib import contextmanager
 from dataclasses import dataclass, field
@@ -17,6 +18,7 @@ from threadpoolctl import threadpool_limits
 from interlock.blocks.assembly import Assembly
 from interlock.errors import InterlockError
 from interlock.verify.contacts import contacts as find_contacts
+from interlock.verify.margin import Margin, assess
 from interlock.verify.matrix import InterlockingMatrix, interlocking_matrix
 from interlock.verify.validate import validate as check_overlaps
 
@@ -39,7 +41,7 @@ LP_SOLVERS = ("clarabel", "highs")
 #: Blocks whose twist is below this fraction of the largest one do not move.
 MOVING_RTOL = 1e-6
 #: The stages of :func:`check`, in order, as reported to its ``progress`` callback and in ``timings``.
-STAGES = ("validate", "contacts", "matrix", "rank", "lp", "certify", "beyond")
+STAGES = ("validate", "contacts", "matrix", "rank", "lp", "margin", "certify", "beyond")
 #: Up to this many columns the rank comes from a dense SVD; above, from block inverse iteration on A^T A.
 DENSE_COLUMNS = 1200
 #: The sparse path looks for at most this many zero singular values (the kernel dimension is then a lower bound).
@@ -92,14 +94,23 @@ class Verdict:
     order: int = 1
     second_order: object = None  # SecondOrder (order 2)
     finite_motion: object = None  # FiniteMotion (order 2), the last one tried
+    margin: Margin | None = None  # how far an "interlocked" answer holds beyond the exact input
+
+    @property
+    def robust(self) -> bool:
+        """True when the input's tolerance is negligible (no margin needed) or the margin exceeds 1."""
+        return self.margin is None or self.margin.lower > 1.0
 
     def __str__(self) -> str:
         word = {True: "interlocked", False: "not infinitesimally interlocked", None: "inconclusive"}[self.interlocked]
+        if self.interlocked is False and self.motion_kind == "within tolerance":
+            word = "not interlocked within tolerance"
         if self.interlocked is True and self.second_order is not None and self.second_order.blocked:
             word = "interlocked (second order)"
         elif self.interlocked is False and self.finite_motion is not None and self.finite_motion.shown:
             word = "not interlocked (finite motion shown)"
-        cert = ", certified" if self.certified else ""
+        exact_only = self.margin is not None and math.isfinite(self.margin.lower)  # the tolerance matters
+        cert = (", certified" + (" for the exact input only" if exact_only else "")) if self.certified else ""
         return f"{word}{cert}: {self.status} (A {self.shape[0]}x{self.shape[1]}, rank {self.rank})"
 
     def to_dict(self) -> dict:
@@ -124,12 +135,13 @@ class Verdict:
             "order": self.order,
             "second_order": None if self.second_order is None else self.second_order.to_dict(),
             "finite_motion": None if self.finite_motion is None else self.finite_motion.to_dict(),
+            "margin": None if self.margin is None else self.margin.to_dict(),
         }
 
 
 def check(assembly: Assembly, frame=None, translational: bool = False, certify: bool = False, *,
           rank_rtol: float = RANK_RTOL, lp_tol: float = LP_TOL, contacts=None, validate: bool = True,
-          progress=None, lp_solver: str = "clarabel", order: int = 1) -> Verdict:
+          progress=None, lp_solver: str = "clarabel", order: int = 1, tolerance: float | None = None) -> Verdict:
     """Decide whether the assembly is infinitesimally interlocked with the given frame.
 
     The assembly is infinitesimally interlocked (Def. 3.3) iff ``{x : A x >= 0} = {0}``
@@ -164,6 +176,15 @@ def check(assembly: Assembly, frame=None, translational: bool = False, certify: 
     lp_solver : {"clarabel", "highs"}
         Solver of the stress LP; HiGHS also serves as fallback when Clarabel
         neither solves nor proves infeasibility.  Reported in ``tolerances``.
+    tolerance : float, optional
+        How far (a length, model units) the blocks' faces may be from the
+        input's: an "interlocked" answer must hold for every assembly within
+        it (docs/interlocking.md, "Margin and tolerance").  Default: what the
+        coordinates' rounding implies (:func:`~interlock.verify.margin.assess`;
+        float32 files: about 2e-7 of the largest coordinate).  Where some
+        motion keeps every contact within it, the answer is False ("not
+        interlocked within tolerance", with the motion); where neither is
+        shown, None with the margin's bounds.
     order : {1, 2}
         1: the first-order verdict above.  2: a verdict that is not
         "interlocked" is taken further (:func:`beyond_first_order`): blocked at
@@ -249,6 +270,9 @@ def check(assembly: Assembly, frame=None, translational: bool = False, certify: 
         why = "the rank is within the tolerance band" if not rank_clear else "the LPs found neither a stress nor a motion"
         verdict = Verdict(None, f"floating point is not conclusive: {why}", rank=rank, lp_value=lp_value,
                           stress=stress, **base)
+    if verdict.interlocked is True:
+        with _stage(timings, "margin", progress):
+            verdict = _with_margin(verdict, assess(A, found, assembly, stress, tolerance), A, len(assembly))
     if certify:
         from interlock.verify.certify import certify_verdict
 
@@ -318,6 +342,24 @@ def _stage(timings: dict, name: str, progress):
 
 
 # --- numerics ---------------------------------------------------------------------
+
+
+def _with_margin(verdict: Verdict, margin: Margin, A: InterlockingMatrix, blocks: int) -> Verdict:
+    """An "interlocked" verdict with its margin: kept above 1, False with a motion within tolerance, else None."""
+    verdict = dataclasses.replace(verdict, margin=margin, tolerances={**verdict.tolerances,
+                                                                      "tolerance": margin.tolerance,
+                                                                      "tolerance_from": margin.source})
+    if margin.lower > 1.0:
+        return verdict if math.isinf(margin.lower) else dataclasses.replace(verdict, status=f"{verdict.status}; {margin}")
+    if margin.motion is not None and margin.upper <= 1.0:
+        motion, moving = _motion(A, margin.motion, blocks, reversible=False)
+        return dataclasses.replace(
+            verdict, interlocked=False, motion=motion, motion_kind="within tolerance", moving=moving,
+            status=f"{_names(moving)} a first-order motion that keeps every contact within the tolerance "
+                   f"{margin.tolerance:.3g} ({margin}); the exact input is interlocked")
+    return dataclasses.replace(verdict, interlocked=None, status=(
+        f"not conclusive within the tolerance {margin.tolerance:.3g}: {margin}; "
+        f"the exact input is interlocked ({verdict.status})"))
 
 
 def _rank(A: sp.csr_matrix, rtol: float):
