@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 import trimesh
-from hypothesis import given, settings
+from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
@@ -155,6 +155,10 @@ def test_out_of_time_is_inconclusive_not_a_guess(reference_data):
 @settings(max_examples=8, deadline=None)
 @given(st.integers(0, 2**32 - 1), st.floats(0.2, 5.0), st.floats(5.0, 40.0))
 def test_verdict_invariant_under_rigid_motion_and_scaling(seed, scale, tilt):
+    # the "paper" pyramid circumscribes the Coulomb cone with a face at angle 0 of each contact's basis: a slide
+    # needs mu along a face and up to mu / cos(pi/8) between faces, and turning the model turns the bases, so
+    # within that band the verdict may follow the pyramid's orientation (found by hypothesis: 22 deg, mu 0.4)
+    assume(not 0.4 <= math.tan(math.radians(tilt)) <= 0.4 / math.cos(math.pi / 8))
     rotation = Rotation.random(random_state=seed)
     transform = np.eye(4)
     transform[:3, :3] = scale * rotation.as_matrix()
