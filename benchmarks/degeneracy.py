@@ -1,6 +1,6 @@
 """Stability where methods fail: which verdict each method gives as an assembly approaches degeneracy.
 
-Three families, each with a truth known exactly for every parameter value:
+Five families, each with a truth known for every parameter value:
 
 A. **δ, an Escher edge that flattens.**  A p1 block with one intermediate
    point at distance δ from the line of edge 0 (its partner, edge 2, receives
@@ -24,6 +24,15 @@ B. **ε, a folded contact face.**  The 3 x 3 cube grid of Ex. 3.5 (ring fixed)
    vertical could survive, and it cannot: the middle cube is infinitesimally
    interlocked (exact certificates for ε >= 1e-5 confirm it).  Verdicts:
    ``check`` with rotations.
+D. **float32 files.**  The TopoLite bunny (80 parts), turned by a random
+   rotation (the parameter is its seed), written as binary STL (32-bit
+   floats, what every STL exporter writes) and read back.  Truth: with parts 0
+   and 1 fixed it is interlocked; with part 1 alone fixed, part 0 comes out.
+   Rounding bends the sliding faces by about 1e-7 of the model size, and first
+   order used to see blocking rows that no physical part has.
+E. **vertex noise.**  The bunny with every vertex moved by Gaussian noise of
+   1e-12 ... 1e-3 of the model size (same truths; at the largest amplitudes the
+   parts overlap and the input is refused).
 C. **s, a change of units.**  Ex. 3.6's tilted cube layer (interlocked),
    Ex. 3.5's cube grid (the middle cube slides) and a p4 Escher patch with its
    ring fixed (interlocked, exact certificate) with every coordinate
@@ -66,16 +75,28 @@ import numpy as np
 import shapely
 import trimesh
 
-from benchmarks.common import main, pyplot, save_chart, write_json
+import tempfile
+from pathlib import Path
+
+from scipy.spatial.transform import Rotation
+
+from benchmarks.common import REFERENCE_DATA, main, pyplot, save_chart, write_json
 from interlock import wallpaper
 from interlock.blocks import Assembly, escher_block, patch, periodic_cell, presets
 from interlock.errors import InterlockError
+from interlock.gallery import export
 from interlock.verify import check, contacts, criterion_4_3, periodic_check
 
 DELTAS = tuple(10.0**-k for k in range(1, 15)) + (0.0,)
 QUICK_DELTAS = (1e-1, 1e-4, 1e-5, 1e-9, 1e-14, 0.0)
 SCALES = tuple(10.0**k for k in range(-6, 7, 2))
 QUICK_SCALES = (1e-6, 1.0, 1e6)
+SEEDS = tuple(range(6))
+QUICK_SEEDS = (0,)
+NOISE = (1e-12, 1e-10, 1e-9, 1e-8, 1e-7, 1e-6, 1e-5, 1e-4, 1e-3)
+QUICK_NOISE = (1e-9, 1e-7, 1e-5)
+#: The bunny's frames and their truths (TopoLite's test suite; ``tests/data/README.md``).
+BUNNY_FRAMES = {"frame {0, 1}": ((0, 1), True), "frame {1}": ((1,), False)}
 #: Patch radius (in lattice units of p1, a = 1) of family A.
 PATCH_RADIUS = 2.0
 #: Contact tolerances (rtol, angle_tol) of the non-default rows.
@@ -87,30 +108,31 @@ CLASSES = ("correct", "wrong", "inconclusive", "refused")
 COLOURS = {"correct": "#4daf4a", "wrong": "#e41a1c", "inconclusive": "#bdbdbd", "refused": "#ffffff"}
 
 
-def _check_method(rank_rtol=None, contact_tolerances=None, certify=False, translational=False):
+def _check_method(rank_rtol=None, contact_tolerances=None, certify=False, translational=False, frame=None):
     """A method: ``check`` of an assembly with the given tolerances, as (interlocked, certified, status)."""
     def method(assembly):
         found = None if contact_tolerances is None else contacts(assembly, *contact_tolerances)
         options = {} if rank_rtol is None else {"rank_rtol": rank_rtol}
-        v = check(assembly, translational=translational, certify=certify, contacts=found, **options)
+        v = check(assembly, frame, translational=translational, certify=certify, contacts=found, **options)
         return v.interlocked, v.certified, v.status
     return method
 
 
-def _methods(translational: bool) -> dict:
-    """The ``check`` variants compared in families A and B, by row label."""
-    t = translational
+def _methods(translational: bool, frame=None) -> dict:
+    """The ``check`` variants compared in families A, B, D and E, by row label."""
+    t, f = translational, frame
     return {
-        "check: defaults": _check_method(translational=t),
-        "check: rank_rtol 1e-6": _check_method(rank_rtol=1e-6, translational=t),
-        "check: rank_rtol 1e-12": _check_method(rank_rtol=1e-12, translational=t),
-        "check: contacts 1e-3, 1e-2 rad": _check_method(contact_tolerances=LOOSE_CONTACTS, translational=t),
-        "check: contacts 1e-8": _check_method(contact_tolerances=TIGHTER_CONTACTS, translational=t),
-        "check: contacts 1e-12": _check_method(contact_tolerances=TIGHT_CONTACTS, translational=t),
+        "check: defaults": _check_method(translational=t, frame=f),
+        "check: rank_rtol 1e-6": _check_method(rank_rtol=1e-6, translational=t, frame=f),
+        "check: rank_rtol 1e-12": _check_method(rank_rtol=1e-12, translational=t, frame=f),
+        "check: contacts 1e-3, 1e-2 rad": _check_method(contact_tolerances=LOOSE_CONTACTS, translational=t, frame=f),
+        "check: contacts 1e-8": _check_method(contact_tolerances=TIGHTER_CONTACTS, translational=t, frame=f),
+        "check: contacts 1e-12": _check_method(contact_tolerances=TIGHT_CONTACTS, translational=t, frame=f),
         "check: contacts 1e-12, rank_rtol 1e-12": _check_method(rank_rtol=1e-12, contact_tolerances=TIGHT_CONTACTS,
-                                                         translational=t),
-        "certify=True": _check_method(certify=True, translational=t),
-        "certify=True, contacts 1e-12": _check_method(certify=True, contact_tolerances=TIGHT_CONTACTS, translational=t),
+                                                                translational=t, frame=f),
+        "certify=True": _check_method(certify=True, translational=t, frame=f),
+        "certify=True, contacts 1e-12": _check_method(certify=True, contact_tolerances=TIGHT_CONTACTS,
+                                                      translational=t, frame=f),
     }
 
 
@@ -230,6 +252,46 @@ def _family_b(epsilons) -> dict:
     return {"parameter": "epsilon", "values": list(epsilons), "truth": [e > 0 for e in epsilons], "rows": rows}
 
 
+# --- families D and E: the bunny rounded to float32, and with vertex noise ------------------------
+
+
+def _bunny() -> Assembly:
+    folder = REFERENCE_DATA / "topolite" / "bunny"
+    return Assembly.load([folder / f"part_{k}.obj" for k in range(1, 81)], frame=())
+
+
+def _float32_bunny(bunny: Assembly, seed: int) -> Assembly:
+    """The bunny turned by a random rotation, written as binary STL and read back (float32 coordinates)."""
+    turn = Rotation.random(random_state=seed).as_matrix()
+    turned = Assembly.from_meshes([trimesh.Trimesh(m.vertices @ turn.T, m.faces) for m in bunny.world_meshes()])
+    with tempfile.TemporaryDirectory() as folder:
+        path = Path(folder) / "bunny.stl"
+        export(turned, path)
+        return Assembly.load(path, frame=())
+
+
+def _noisy_bunny(bunny: Assembly, amplitude: float) -> Assembly:
+    rng = np.random.default_rng(0)
+    return Assembly.from_meshes([trimesh.Trimesh(m.vertices + rng.normal(scale=amplitude * bunny.scale,
+                                                                         size=m.vertices.shape), m.faces)
+                                 for m in bunny.world_meshes()])
+
+
+def _bunny_family(parameter: str, values, build, quick: bool) -> dict:
+    """Rows "frame: method" over the subjects ``build(value)``; quick runs the defaults and certify only."""
+    rows = {}
+    subjects = [_build(build, value) for value in values]
+    for frame_name, (frame, truth) in BUNNY_FRAMES.items():
+        methods = _methods(translational=False, frame=frame)
+        if quick:
+            methods = {name: methods[name] for name in ("check: defaults", "certify=True")}
+        for name, method in methods.items():
+            rows[f"{frame_name}: {name}"] = [_outcome(method, subject, truth, name.startswith("certify"))
+                                             for subject in subjects]
+    truths = {frame_name: truth for frame_name, (_, truth) in BUNNY_FRAMES.items()}
+    return {"parameter": parameter, "values": list(values), "truth": truths, "rows": rows}
+
+
 # --- family C: units -----------------------------------------------------------------------------
 
 
@@ -292,7 +354,7 @@ def _summary(family: dict) -> dict:
     out = {}
     for row, outcomes in family["rows"].items():
         classes = [o["class"] for o in outcomes]
-        out[row] = {"threshold": _threshold(family, row) if family["parameter"] != "scale" else None,
+        out[row] = {"threshold": _threshold(family, row) if family["parameter"] in ("delta", "epsilon") else None,
                     "counts": {c: classes.count(c) for c in CLASSES},
                     "wrong_at": [v for v, c in zip(family["values"], classes) if c == "wrong"],
                     "seconds": sum(o["seconds"] for o in outcomes)}
@@ -311,12 +373,22 @@ def run(quick: bool = False) -> dict:
             start = time.perf_counter()
             families[key] = build(values)
             timings[key] = time.perf_counter() - start
+        bunny = _bunny()
+        for key, parameter, values, build in (
+                ("D", "seed", QUICK_SEEDS if quick else SEEDS, lambda seed: _float32_bunny(bunny, seed)),
+                ("E", "amplitude", QUICK_NOISE if quick else NOISE, lambda a: _noisy_bunny(bunny, a))):
+            start = time.perf_counter()
+            families[key] = _bunny_family(parameter, values, build, quick)
+            timings[key] = time.perf_counter() - start
     summaries = {key: _summary(family) for key, family in families.items()}
     delta_star = summaries["A"]["check: defaults"]["threshold"]
     epsilon_star = summaries["B"]["check: defaults"]["threshold"]
     default_rows = ("check: defaults", "certify=True")
     never_wrong = {key: all(not summaries[key][row]["wrong_at"] for row in default_rows) for key in ("A", "B")}
     never_wrong["C"] = all(not s["wrong_at"] for s in summaries["C"].values())
+    for key in ("D", "E"):  # contact tolerances below the noise miss contacts: shown, but not the defaults
+        never_wrong[key] = all(not summaries[key][f"{frame}: {row}"]["wrong_at"]
+                               for frame in BUNNY_FRAMES for row in default_rows)
     for key, family in families.items():
         for row, info in summaries[key].items():
             wrong = ", ".join(f"{v:g}" for v in info["wrong_at"]) or "never"
@@ -327,11 +399,11 @@ def run(quick: bool = False) -> dict:
                "epsilon_star": epsilon_star, "defaults_never_wrong": never_wrong, "families": families,
                "summary": summaries, "seconds": timings}
     write_json("degeneracy", payload)
-    _chart(families, delta_star, epsilon_star, never_wrong["A"] and never_wrong["B"])
+    _chart(families, delta_star, epsilon_star, never_wrong["A"] and never_wrong["B"], never_wrong)
     return payload
 
 
-def _chart(families: dict, delta_star, epsilon_star, never_wrong: bool) -> None:
+def _chart(families: dict, delta_star, epsilon_star, never_wrong: bool, by_family: dict) -> None:
     plt = pyplot()
     if plt is None:
         return
@@ -340,7 +412,11 @@ def _chart(families: dict, delta_star, epsilon_star, never_wrong: bool) -> None:
 
     titles = {"A": "A: p1 Escher edge at distance δ from its line (translational; truth: interlocked iff δ > 0)",
               "B": "B: Ex. 3.5 grid, middle cube's face folded by ε (truth: interlocked iff ε > 0)",
-              "C": "C: coordinates × s (truth: Ex. 3.6 and p4 interlocked, Ex. 3.5 not; for every s)"}
+              "C": "C: coordinates × s (truth: Ex. 3.6 and p4 interlocked, Ex. 3.5 not; for every s)",
+              "D": "D: TopoLite bunny turned (seed) and written as float32 STL (truth: {0, 1} interlocked, {1} not)"
+                   + ("" if by_family.get("D", True) else " — WRONG VERDICTS"),
+              "E": "E: TopoLite bunny with vertex noise × model size (truth: {0, 1} interlocked, {1} not)"
+                   + ("" if by_family.get("E", True) else " — WRONG VERDICTS")}
     heights = [len(f["rows"]) + 2 for f in families.values()]
     fig, axes = plt.subplots(len(families), 1, figsize=(12, 0.36 * sum(heights) + 1.5),
                              gridspec_kw={"height_ratios": heights})
@@ -358,7 +434,8 @@ def _chart(families: dict, delta_star, epsilon_star, never_wrong: bool) -> None:
         ax.set_yticks(np.arange(-0.5, len(rows)), minor=True)
         ax.grid(which="minor", color="#666666", linewidth=0.5)
         ax.tick_params(which="minor", length=0)
-        ax.set_xlabel({"delta": "δ", "epsilon": "ε (radians)", "scale": "s"}[family["parameter"]], fontsize=8)
+        ax.set_xlabel({"delta": "δ", "epsilon": "ε (radians)", "scale": "s", "seed": "rotation seed",
+                       "amplitude": "noise / model size"}[family["parameter"]], fontsize=8)
         star = {"A": delta_star, "B": epsilon_star}.get(key)
         if star is not None:
             ax.axvline(family["values"].index(star) + 0.5, color="black", linewidth=2)

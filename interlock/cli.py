@@ -59,11 +59,18 @@ def _parser() -> argparse.ArgumentParser:
     verify = commands.add_parser(
         "verify", help="decide whether blocks from mesh files interlock (LP + rank, Def. 3.3)",
         description="Decide whether the blocks in the given mesh files interlock with the fixed blocks as frame. "
-                    "Give one file per block (numbered from 0 in the order given) or one file holding all blocks.",
+                    "Give one file per block (numbered from 0 in the order given) or one file holding all blocks. "
+                    "The frame is --fixed if given, else the one the files store (interlock generate writes it "
+                    "into every format), else none; the output says which.",
+        epilog="examples:\n  interlock generate wallpaper p4 --deform 0:0.25,0.1 -o p4.vtu\n"
+               "  interlock verify p4.vtu                 (the frame stored in p4.vtu)\n"
+               "  interlock verify p4.vtu --fixed 0-3,7   (another frame)",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    verify.add_argument("paths", nargs="+", help="OBJ/STL/PLY/GLB files")
-    verify.add_argument("--fixed", default="", metavar="LIST",
-                        help="frame: block indices, e.g. 0,1 or 0-3,7 (default: none)")
+    verify.add_argument("paths", nargs="+", help="mesh files: OBJ, STL, PLY, GLB, 3MF, VTU, XDMF")
+    verify.add_argument("--fixed", default=None, metavar="LIST",
+                        help="frame: block indices, e.g. 0,1 or 0-3,7 (default: the frame stored in the file, "
+                             "if any, else none)")
     verify.add_argument("--translational", action="store_true", help="translations only")
     verify.add_argument("--certify", action="store_true", help="re-check the verdict rigorously")
     verify.add_argument("--order", type=int, choices=(1, 2), default=1,
@@ -237,7 +244,7 @@ def _run_verify(args) -> int:
     from interlock.verify.check import STAGES
 
     paths = args.paths[0] if len(args.paths) == 1 else args.paths
-    assembly = Assembly.load(paths, frame=_indices(args.fixed))
+    assembly = Assembly.load(paths, frame=None if args.fixed is None else _indices(args.fixed))
     stages = [s for s in STAGES if (s != "certify" or args.certify) and (s != "beyond" or args.order == 2)]
     with tqdm(total=len(stages), desc="verify", unit="stage", disable=None, leave=False) as bar:
         def announce(stage):
@@ -258,10 +265,12 @@ def _run_verify(args) -> int:
     if args.json:
         record = verdict.to_dict()
         record["blocks"] = [str(label) for label in assembly.labels]
+        record["frame_from"] = _FRAME_FROM.get(assembly.info.get("frame_from"), "none")
         print(json.dumps(record, indent=2))
         return 0
     print(verdict)
-    print(f"blocks: {len(assembly)}, frame: {list(verdict.frame)}, contacts: {verdict.contacts}")
+    print(f"blocks: {len(assembly)}, frame: {_frame_text(verdict.frame, assembly.info.get('frame_from'))}, "
+          f"contacts: {verdict.contacts}")
     if verdict.moving:
         shown = ", ".join(f"{b} ({assembly.labels[b]})" for b in verdict.moving[:MOVING_SHOWN])
         more = f" and {len(verdict.moving) - MOVING_SHOWN} more" if len(verdict.moving) > MOVING_SHOWN else ""
@@ -278,6 +287,20 @@ def _run_verify(args) -> int:
     timings = ", ".join(f"{name} {seconds:.3f}s" for name, seconds in verdict.timings.items())
     print(f"timings: {timings}")
     return 0
+
+
+#: How ``verify`` names where the frame came from (``Assembly.info["frame_from"]``).
+_FRAME_FROM = {"argument": "--fixed", "file": "the file", "upstream examples": "the upstream examples",
+               "none": "none"}
+
+
+def _frame_text(frame, origin) -> str:
+    """'[0, 8] (from --fixed)', '24 blocks (from the file)' or '[] (no --fixed given, none stored)'."""
+    source = _FRAME_FROM.get(origin, "none")
+    if source == "none":
+        return "[] (no --fixed given, none stored)"
+    shown = str(list(frame)) if len(frame) <= MOVING_SHOWN else f"{len(frame)} blocks"
+    return f"{shown} (from {source})"
 
 
 def _run_periodic(args) -> int:

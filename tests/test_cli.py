@@ -86,6 +86,30 @@ def test_verify_order_2_shows_the_finite_motion_and_writes_its_frames(tmp_path, 
     assert record["second_order"]["blocked"] is False
 
 
+@pytest.mark.parametrize("suffix", [".vtu", ".stl", ".obj"])
+def test_verify_uses_and_reports_the_frame_the_file_stores(tmp_path, capsys, suffix):
+    out = tmp_path / f"p4{suffix}"
+    assert main(["generate", "wallpaper", "p4", "--deform", "0:0.25,0.1", "-o", str(out)]) == 0
+    assert capsys.readouterr().out.strip().endswith("69 blocks, 24 in the frame")
+    assert main(["verify", str(out), "--json"]) == 0
+    record = json.loads(capsys.readouterr().out)
+    assert record["frame_from"] == "the file" and record["frame"] == list(range(45, 69))
+    assert main(["verify", str(out)]) == 0
+    stored = capsys.readouterr().out.splitlines()
+    assert stored[1].startswith("blocks: 69, frame: 24 blocks (from the file), contacts: ")
+    assert main(["verify", str(out), "--fixed", "45-68"]) == 0
+    given = capsys.readouterr().out.splitlines()
+    assert given[0] == stored[0] and given[1] == stored[1].replace("(from the file)", "(from --fixed)")
+    assert main(["verify", str(out), "--fixed", "45,46"]) == 0
+    assert "blocks: 69, frame: [45, 46] (from --fixed), contacts: " in capsys.readouterr().out
+
+
+def test_verify_without_a_frame_says_so(tmp_path, capsys):
+    paths = _cube_files(tmp_path, [(0, 0), (1, 0)])
+    assert main(["verify", *paths]) == 0
+    assert "blocks: 2, frame: [] (no --fixed given, none stored), contacts: 1" in capsys.readouterr().out
+
+
 @pytest.mark.parametrize("argv_tail,message", [
     (["--fixed", "x"], "cannot read block list 'x'"),
     (["--fixed", "7"], "frame index 7 is out of range for 2 blocks"),
@@ -178,7 +202,7 @@ def test_generate_bad_input_is_one_line(tmp_path, argv, message):
     assert len(lines) == 1 and message in lines[0], lines
 
 
-@pytest.mark.parametrize("command", [["gallery"], ["generate", "wallpaper"], ["generate", "rhomblock"]])
+@pytest.mark.parametrize("command", [["gallery"], ["generate", "wallpaper"], ["generate", "rhomblock"], ["verify"]])
 def test_help_shows_an_example(command, capsys):
     with pytest.raises(SystemExit):
         main([*command, "--help"])

@@ -12,7 +12,8 @@ import shapely
 import trimesh
 
 from interlock.blocks.compas import read_compas
-from interlock.blocks.meshfiles import BLOCK_DATA, HEADER_MARKER, STL_RECORD, read_bodies
+from interlock.blocks.meshfiles import BLOCK_DATA, HEADER_MARKER, STL_RECORD, read_mesh_file
+from interlock.blocks.repair import TJUNCTION_RTOL, split_t_junctions, unmatched_edges
 from interlock.errors import AssemblyError
 
 __all__ = ["Assembly", "AssemblyError", "load_compas", "NEIGHBOUR_RTOL", "RIGID_TOL", "KIND_DECIMALS", "HEADER_MARKER", "STL_RECORD",
@@ -70,8 +71,8 @@ class Assembly:
         if len(self.labels) != len(types):
             raise AssemblyError(f"got {len(self.labels)} labels for {len(types)} blocks")
         one_mesh_per_block = len(meshes) == len(types) and bool(np.array_equal(types, np.arange(len(types))))
-        self.meshes: tuple[trimesh.Trimesh, ...] = tuple(
-            _checked_mesh(m, _mesh_name(k, labels, one_mesh_per_block)) for k, m in enumerate(meshes))
+        self.meshes: tuple[trimesh.Trimesh, ...] = _checked_meshes(
+            meshes, [_mesh_name(k, labels, one_mesh_per_block) for k in range(len(meshes))])
         if types.size and (types.min() < 0 or types.max() >= len(self.meshes)):
             raise AssemblyError(f"block types must index the {len(self.meshes)} meshes, got values {types.min()}..{types.max()}")
         transforms = np.asarray(transforms, dtype=float).reshape(-1, 4, 4)
@@ -95,7 +96,7 @@ class Assembly:
         return cls(meshes, range(len(meshes)), np.tile(np.eye(4), (len(meshes), 1, 1)), labels, frame, info=info)
 
     @classmethod
-    def load(cls, paths, frame=()) -> Assembly:
+    def load(cls, paths, frame=None) -> Assembly:
         """Blocks from mesh files (OBJ, STL, PLY, GLB, 3MF, ... through trimesh; VTU, XDMF through meshio).
 
         ``paths`` is a sequence of files, one block each (labels: file names),
@@ -107,25 +108,76 @@ class Assembly:
           ``interlock blocks=N`` comment, the cell data :data:`BLOCK_DATA` of VTU and XDMF;
         - its objects: OBJ ``o`` statements, GLB/3MF scene nodes (node transforms
           applied), in file order for OBJ and by name (digits as numbers) otherwise;
+        - for an OBJ file without objects: the sets of faces that share vertex indices, or
+          else the runs of ``v`` lines each followed by its faces, if each is a closed surface
+          (a selection of blocks exported from Rhino);
         - else its connected bodies.
 
-        Bodies that touch cannot be told apart in a single plain STL or PLY file;
-        that is an error asking for one file per block or an OBJ with objects.
-        Polygonal faces are triangulated.
+        A file written by :func:`~interlock.gallery.export.export` announces its blocks
+        (``interlock blocks=N``); one with fewer is cut short, an error.  Bodies
+        that touch cannot be told apart in a single plain STL or PLY file; that
+        is an error asking for one file per block or an OBJ with objects.
+        Polygonal faces are triangulated inside their outline
+        (:func:`~interlock.blocks.repair.triangulate_polygons`), and T-junctions
+        are split (:func:`~interlock.blocks.repair.split_t_junctions`).
+
+        Parameters
+        ----------
+        paths : str, Path or sequence of them
+        frame : iterable of int, optional
+            Indices of the fixed blocks.  Default: the frame the file stores
+            (:mod:`interlock.blocks.meshfiles`: STL attribute bits, PLY/VTU/XDMF
+            ``fixed`` data, OBJ/GLB/3MF names ending in ``fixed``); for a list
+            of files, the blocks whose file marks them fixed; else none.
+
+        Returns
+        -------
+        Assembly
+            ``info["source"]`` lists the files; ``info["frame_from"]`` says where
+            the frame came from: ``"argument"``, ``"file"`` or ``"none"`` (for
+            COMPAS JSON also ``"upstream examples"``).
+
+        Raises
+        ------
+        AssemblyError
+            For a missing, unreadable or cut-short file, a block that is not a
+            closed surface, touching bodies in one plain STL or PLY file, or a
+            frame index out of range.
+
+        Examples
+        --------
+        >>> import tempfile
+        >>> cubes = [trimesh.creation.box(bounds=[[x, 0, 0], [x + 1, 1, 1]]) for x in range(3)]
+        >>> with tempfile.TemporaryDirectory() as folder:
+        ...     path = Path(folder) / "row.obj"
+        ...     _ = path.write_text(trimesh.exchange.obj.export_obj(trimesh.util.concatenate(cubes)))
+        ...     row, fixed = Assembly.load(path), Assembly.load(path, frame=[0, 2])
+        >>> len(row), row.frame, row.info["frame_from"], fixed.frame, fixed.info["frame_from"]
+        (3, (), 'none', (0, 2), 'argument')
         """
         if isinstance(paths, (str, Path)) and Path(paths).suffix.lower() == ".json":  # COMPAS; frame: node keys
-            return load_compas(paths, supports=list(frame or ()) or None)
+            assembly = load_compas(paths, supports=None if frame is None else list(frame))
+            assembly.info["frame_from"] = assembly.info["supports_from"]
+            return assembly
         if isinstance(paths, (str, Path)):
             path = Path(paths)
-            bodies = read_bodies(path)
-            labels = [f"{path.name}:{name}" for name, _ in bodies]
-            return cls.from_meshes([m for _, m in bodies], frame=frame, labels=labels, info={"source": [str(path)]})
-        paths = [Path(p) for p in paths]
-        if not paths:
-            raise AssemblyError("no mesh files given; pass one path or a list of paths")
-        meshes = [trimesh.util.concatenate([m for _, m in read_bodies(p, split=False)]) for p in paths]
-        return cls.from_meshes(meshes, frame=frame, labels=[p.name for p in paths],
-                               info={"source": [str(p) for p in paths]})
+            found = read_mesh_file(path)
+            labels = [f"{path.name}:{name}" for name in found.names]
+            stored, sources = found.frame, [str(path)]
+            meshes = found.meshes
+        else:
+            paths = [Path(p) for p in paths]
+            if not paths:
+                raise AssemblyError("no mesh files given; pass one path or a list of paths")
+            files = [read_mesh_file(p, split=False) for p in paths]
+            meshes = [trimesh.util.concatenate(list(f.meshes)) if len(f.meshes) > 1 else f.meshes[0] for f in files]
+            labels, sources = [p.name for p in paths], [str(p) for p in paths]
+            marked = [f.frame is not None for f in files]
+            stored = tuple(k for k, f in enumerate(files) if f.frame) if any(marked) else None
+        frame_from = "argument" if frame is not None else "none" if stored is None else "file"
+        chosen = frame if frame is not None else stored or ()
+        return cls.from_meshes(meshes, frame=chosen, labels=labels,
+                               info={"source": sources, "frame_from": frame_from})
 
     def with_frame(self, frame) -> Assembly:
         """The same blocks with another frame."""
@@ -342,29 +394,58 @@ def _mesh_name(k: int, labels, one_mesh_per_block: bool) -> str:
     return f"block {k} ({labels[k]})" if labels is not None else f"block {k}"
 
 
-def _checked_mesh(mesh, name) -> trimesh.Trimesh:
-    """The mesh, outward-oriented; it must be closed: every directed edge matched by its reverse.
+def _checked_meshes(meshes, names) -> tuple[trimesh.Trimesh, ...]:
+    """The meshes, outward-oriented; each must be closed: every directed edge matched by its reverse.
 
-    Non-manifold edges (four faces meeting, as in voxel parts) are allowed.
+    Non-manifold edges (four faces meeting, as in voxel parts) are allowed, and so are
+    T-junctions: meshes with unmatched edges get them split at the vertices on them
+    (:func:`~interlock.blocks.repair.split_t_junctions`, :data:`~interlock.blocks.repair.TJUNCTION_RTOL`)
+    before they are judged.  All meshes are checked at once with numpy (edges,
+    T-junctions, signed volumes); only meshes that need it are rebuilt.
     """
-    if not isinstance(mesh, trimesh.Trimesh):
-        raise AssemblyError(f"{name} must be a trimesh.Trimesh, got {type(mesh).__name__}")
-    if len(mesh.faces) == 0 or not np.all(np.isfinite(mesh.vertices)):
-        raise AssemblyError(f"{name} is empty or has non-finite vertex coordinates")
-    if not mesh.is_watertight:
-        directed = mesh.faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
-        edges, counts = np.unique(directed, axis=0, return_counts=True)
-        count_of = dict(zip(map(tuple, edges.tolist()), counts.tolist()))
-        unmatched = sum(1 for (a, b), k in count_of.items() if count_of.get((b, a), 0) != k)
-        if unmatched:
-            raise AssemblyError(f"{name} is not a closed, consistently oriented surface ({unmatched} edges without "
-                                "a matching opposite edge); blocks must be closed polyhedra")
-    if mesh.volume < 0:
-        mesh = mesh.copy()
-        mesh.invert()
-    if not mesh.volume > 0:
-        raise AssemblyError(f"{name} encloses no volume")
-    return mesh
+    for mesh, name in zip(meshes, names):
+        if not isinstance(mesh, trimesh.Trimesh):
+            raise AssemblyError(f"{name} must be a trimesh.Trimesh, got {type(mesh).__name__}")
+        if len(mesh.faces) == 0 or not np.all(np.isfinite(mesh.vertices)):
+            raise AssemblyError(f"{name} is empty or has non-finite vertex coordinates")
+    if not meshes:
+        return ()
+    offsets = np.cumsum([0] + [len(m.vertices) for m in meshes])
+    vertices = np.vstack([m.vertices for m in meshes]).astype(float, copy=False)
+    vertex_mesh = np.repeat(np.arange(len(meshes)), np.diff(offsets))
+    faces = [np.asarray(m.faces, dtype=np.int64) + o for m, o in zip(meshes, offsets)]
+    open_meshes = np.unique(vertex_mesh[unmatched_edges(np.vstack(faces))[:, 0]])
+    meshes = list(meshes)
+    if open_meshes.size:
+        split = split_t_junctions(vertices, np.vstack([faces[k] for k in open_meshes]), TJUNCTION_RTOL, vertex_mesh)
+        still = vertex_mesh[unmatched_edges(split)[:, 0]]
+        if still.size:
+            k = int(still.min())
+            raise AssemblyError(f"{names[k]} is not a closed, consistently oriented surface "
+                                f"({np.count_nonzero(still == k)} edges without a matching opposite edge, also after "
+                                "splitting edges at the vertices on them); blocks must be closed polyhedra")
+        split = split[np.argsort(vertex_mesh[split[:, 0]], kind="stable")]
+        ends = np.searchsorted(vertex_mesh[split[:, 0]], open_meshes, side="right")
+        for k, own in zip(open_meshes.tolist(), np.split(split, ends[:-1])):
+            faces[k] = own
+            meshes[k] = trimesh.Trimesh(meshes[k].vertices, own - offsets[k], process=False)
+    for k in np.flatnonzero(_signed_volumes(vertices, faces, offsets) <= 0).tolist():
+        if meshes[k].volume < 0:
+            meshes[k] = meshes[k].copy()
+            meshes[k].invert()
+        if not meshes[k].volume > 0:
+            raise AssemblyError(f"{names[k]} encloses no volume")
+    return tuple(meshes)
+
+
+def _signed_volumes(vertices, faces, offsets) -> np.ndarray:
+    """Each mesh's signed volume (positive for outward faces), about the mean of its vertices."""
+    counts = np.diff(offsets)
+    centres = np.add.reduceat(vertices, offsets[:-1]) / counts[:, None]  # every mesh has vertices
+    face_mesh = np.repeat(np.arange(len(faces)), [len(f) for f in faces])
+    corners = vertices[np.vstack(faces)] - centres[face_mesh][:, None]
+    triple = np.einsum("ij,ij->i", corners[:, 0], np.cross(corners[:, 1], corners[:, 2]))
+    return np.bincount(face_mesh, triple, minlength=len(faces)) / 6
 
 
 def _check_transforms(transforms):

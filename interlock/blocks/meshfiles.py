@@ -1,76 +1,197 @@
-"""Reading mesh files into named bodies: the blocks a file holds, by stored index, by object, or by body."""
+"""Reading mesh files: the blocks a file holds (by stored index, by object, or by body) and the frame it stores."""
 
 from __future__ import annotations
 
 import re
+import zipfile
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import trimesh
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
 
+from interlock.blocks.repair import (closed_groups, group_meshes, split_t_junctions, triangulate_polygons,
+                                     unmatched_edges)
 from interlock.errors import AssemblyError
 
-__all__ = ["read_bodies", "HEADER_MARKER", "STL_RECORD", "BLOCK_DATA"]
+__all__ = ["MeshFile", "read_mesh_file", "file_header", "HEADER_MARKER", "STL_RECORD", "BLOCK_DATA",
+           "FIXED_DATA", "FIXED_WORD", "STL_FIXED_BIT", "STL_MAX_FRAMED"]
 
-#: How an exported file says that it stores a block index per triangle, and how many blocks: the start of
-#: a binary STL's 80-byte header, or a PLY comment (``interlock blocks=12`` for 12 blocks).
+#: How an exported file says that it holds interlock blocks, and how many: the start of a binary STL's
+#: 80-byte header, a PLY or OBJ comment, GLB scene extras, 3MF model metadata (see :func:`file_header`).
 HEADER_MARKER = b"interlock blocks="
 #: One triangle of a binary STL: normal, three vertices, and the 2-byte attribute holding the block index.
 STL_RECORD = np.dtype([("normal", "<f4", 3), ("vertices", "<f4", (3, 3)), ("block", "<u2")])
 #: Name of the per-triangle block index in PLY (face property), VTU and XDMF (cell data) files.
 BLOCK_DATA = "block"
+#: Name of the per-triangle frame flag (1: the triangle's block is fixed) in PLY, VTU and XDMF files.
+FIXED_DATA = "fixed"
+#: The last word of the name of a fixed block's object (OBJ ``o block_0007 fixed``), node (GLB) or item (3MF).
+FIXED_WORD = "fixed"
+#: In a binary STL whose header counts the fixed blocks (``fixed=K``), this bit of each triangle's attribute
+#: marks the triangles of fixed blocks, and the 15 bits below it hold the block index.
+STL_FIXED_BIT = 1 << 15
+#: The most blocks a binary STL stores with their frame: block indices below :data:`STL_FIXED_BIT`.
+STL_MAX_FRAMED = STL_FIXED_BIT
+
+_HEADER = re.compile(re.escape(HEADER_MARKER.decode()) + r"(\d+)(?: fixed=(\d+))?(?: triangles=(\d+))?")
 
 
-def read_bodies(path: Path, split: bool = True) -> list[tuple[str, trimesh.Trimesh]]:
-    """(name, mesh in file coordinates) for every block of a mesh file, in file order.
+def file_header(blocks: int, fixed: int | None = None, triangles: int | None = None) -> str:
+    """The text by which an exported file announces its blocks, fixed blocks and (OBJ) triangles.
 
-    Stored block indices win (:func:`_indexed_blocks`), then the file's objects.
-    With ``split``, a file holding one object is split into its connected bodies;
-    without, the file is to be one block, so several stored blocks are refused.
+    Loading checks a file against it: a file with fewer blocks or triangles
+    than announced is cut short.
+
+    Examples
+    --------
+    >>> file_header(27, 3)
+    'interlock blocks=27 fixed=3'
+    >>> _announced(file_header(27, 3, triangles=972))
+    (27, 3, 972)
     """
+    text = HEADER_MARKER.decode() + str(blocks)
+    if fixed is not None:
+        text += f" fixed={fixed}"
+    if triangles is not None:
+        text += f" triangles={triangles}"
+    return text
+
+
+@dataclass(frozen=True)
+class MeshFile:
+    """The blocks of a mesh file: names and meshes (file coordinates) in file order, and the stored frame.
+
+    ``frame`` lists the indices of the blocks that the file marks fixed, or is
+    None when the file stores no frame.  ``announced`` is the number of
+    blocks that the file says it holds (its :func:`file_header`, or its
+    block indices), or None if it does not say.
+    """
+
+    names: tuple[str, ...]
+    meshes: tuple[trimesh.Trimesh, ...]
+    frame: tuple[int, ...] | None = None
+    announced: int | None = None
+
+
+def read_mesh_file(path, split: bool = True) -> MeshFile:
+    r"""The blocks and the frame of a mesh file.
+
+    Stored block indices win (STL, PLY, VTU, XDMF from
+    :func:`~interlock.gallery.export.export`), then the file's objects (OBJ
+    ``o``, GLB nodes, 3MF items), then, for OBJ, the bodies that share vertex
+    indices or else runs of ``v`` lines.  The frame is read from where
+    :func:`~interlock.gallery.export.export` writes it: the STL attribute bit
+    :data:`STL_FIXED_BIT`, the PLY, VTU and XDMF triangle data
+    :data:`FIXED_DATA`, object, node and item names ending in
+    :data:`FIXED_WORD`.
+
+    Parameters
+    ----------
+    path : str or Path
+    split : bool
+        Split a file holding one object into its connected bodies.  Without,
+        the file is to be one block, so a file announcing several is refused.
+
+    Returns
+    -------
+    MeshFile
+
+    Raises
+    ------
+    AssemblyError
+        For a missing or unreadable file, one with fewer blocks, fixed blocks
+        or triangles than it announces (cut short), or touching bodies in one
+        plain file.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> def tetrahedron(name, x):
+    ...     corners = "".join(f"v {x + a} {b} {c}\n" for a, b, c in [(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1)])
+    ...     return f"o {name}\n{corners}f -4 -2 -3\nf -4 -3 -1\nf -3 -2 -1\nf -4 -1 -2\n"
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = Path(folder) / "two.obj"
+    ...     _ = path.write_text(tetrahedron("left", 0) + tetrahedron("right fixed", 2))
+    ...     found = read_mesh_file(path)
+    >>> found.names, found.frame, [round(float(m.volume), 6) for m in found.meshes]
+    (('left', 'right'), (1,), [0.166667, 0.166667])
+    """
+    path = Path(path)
     if not path.is_file():
         raise AssemblyError(f"mesh file {path} does not exist")
+    reader = {".obj": _obj_file, ".stl": _indexed_file, ".ply": _indexed_file, ".vtu": _indexed_file,
+              ".xdmf": _indexed_file}.get(path.suffix.lower(), _scene_file)
     try:
-        blocks = _indexed_blocks(path)
-        bodies = _scene_objects(path) if blocks is None else blocks
+        found, separated = reader(path)
+        if found is None:  # a plain STL or PLY file
+            found, separated = _scene_file(path)
     except AssemblyError:
         raise
     except Exception as error:  # the readers raise many types for unreadable files
         raise AssemblyError(f"cannot read {path} as a mesh ({type(error).__name__}: {error})") from None
-    if not bodies:
+    if not found.meshes:
         raise AssemblyError(f"{path} holds no triangle mesh")
-    if not split and blocks is not None and len(blocks) > 1:
-        raise AssemblyError(f"{path} holds {len(blocks)} blocks, which would merge into one in a list of "
+    if found.announced is not None and found.announced != len(found.meshes):
+        raise AssemblyError(f"{path} is cut short or damaged: it announces {found.announced} blocks, "
+                            f"it holds {len(found.meshes)}")
+    if not split and len(found.meshes) > 1 and found.announced is not None:
+        raise AssemblyError(f"{path} holds {len(found.meshes)} blocks, which would merge into one in a list of "
                             f"one file per block; load it on its own: Assembly.load({str(path)!r})")
-    if split and blocks is None and len(bodies) == 1:
-        parts = bodies[0][1].split(only_watertight=False)
-        if len(parts) > 1:
-            if not all(part.is_watertight for part in parts):
-                raise AssemblyError(f"{path} holds several bodies that touch, which a single {path.suffix} file cannot "
-                                    "separate; give one file per block, or an OBJ file with one object ('o') per block")
-            bodies = [(f"body{k}", part) for k, part in enumerate(parts)]
-    return bodies
+    if split and not separated and len(found.meshes) == 1:
+        found = _splitgroup_meshes(path, found)
+    return found
 
 
-def _scene_objects(path: Path) -> list[tuple[str, trimesh.Trimesh]]:
-    """One mesh per object (OBJ ``o``) or scene node (GLB, 3MF), node transform applied, named by the node."""
-    obj = path.suffix.lower() == ".obj"
-    scene = trimesh.load_scene(path, **({"split_objects": True, "group_material": False} if obj else {}))
-    bodies = []
-    for node in scene.graph.nodes_geometry:
-        transform, name = scene.graph[node]
-        geometry = scene.geometry[name]
-        if isinstance(geometry, trimesh.Trimesh) and len(geometry.faces):
-            body = geometry.copy().apply_transform(transform)  # a reflection also flips the faces
-            body.merge_vertices(merge_tex=True, merge_norm=True)  # per-face normals must not split corners
-            bodies.append((str(node), body))
-    if obj and len(bodies) > 1:
-        order = [line.split(maxsplit=1)[1].strip() for line in path.read_text(errors="replace").splitlines()
-                 if line.startswith("o ") and len(line.split(maxsplit=1)) == 2]
-        bodies.sort(key=lambda body: order.index(body[0]) if body[0] in order else len(order))
-    elif len(bodies) > 1:
-        bodies.sort(key=lambda body: _natural_key(body[0]))
-    return bodies
+def readgroup_meshes(path, split: bool = True) -> list[tuple[str, trimesh.Trimesh]]:
+    """(name, mesh in file coordinates) for every block of a mesh file, in file order (:func:`read_mesh_file`)."""
+    found = read_mesh_file(path, split)
+    return list(zip(found.names, found.meshes))
+
+
+# --- bodies --------------------------------------------------------------------
+def _splitgroup_meshes(path: Path, found: MeshFile) -> MeshFile:
+    """A file's one body split into its connected bodies (sharing an edge, T-junctions split first).
+
+    Bodies that touch share edges of more than two triangles and fall apart
+    into open pieces; a single STL or PLY file cannot tell them apart.
+    """
+    mesh = found.meshes[0]
+    if len(unmatched_edges(mesh.faces)):
+        mesh = trimesh.Trimesh(mesh.vertices, split_t_junctions(mesh.vertices, mesh.faces), process=False)
+    parts = mesh.split(only_watertight=False)
+    if len(parts) <= 1:
+        return found
+    if not all(part.is_watertight for part in parts):
+        raise AssemblyError(f"{path} holds several bodies that touch, which a single {path.suffix} file cannot "
+                            "separate; give one file per block, or an OBJ file with one object ('o') per block")
+    frame = None if found.frame is None else tuple(range(len(parts))) if found.frame else ()
+    return MeshFile(tuple(f"body{k}" for k in range(len(parts))), tuple(parts), frame)
+
+
+def _frame(path: Path, face_block, face_fixed, announced_fixed) -> tuple[int, ...]:
+    """Positions (in sorted block order) of the blocks whose triangles are all marked fixed."""
+    blocks, position = np.unique(face_block, return_inverse=True)
+    marked = np.zeros(len(blocks), dtype=int)
+    np.add.at(marked, position.ravel(), np.asarray(face_fixed, dtype=bool).astype(int))
+    total = np.bincount(position.ravel(), minlength=len(blocks))
+    mixed = np.flatnonzero((marked > 0) & (marked < total))
+    if mixed.size:
+        raise AssemblyError(f"{path} marks only some triangles of block {blocks[mixed[0]]} as fixed; a block is "
+                            "fixed or not as a whole")
+    frame = tuple(np.flatnonzero(marked > 0).tolist())
+    if announced_fixed is not None and announced_fixed != len(frame):
+        raise AssemblyError(f"{path} is cut short or damaged: it announces {announced_fixed} fixed blocks, "
+                            f"its triangles mark {len(frame)}")
+    return frame
+
+
+def _flagged_name(name: str) -> tuple[str, bool]:
+    """``'block_0007 fixed'`` -> ``('block_0007', True)``; other names unchanged."""
+    stem, _, last = name.strip().rpartition(" ")
+    return (stem.rstrip(), True) if stem and last.lower() == FIXED_WORD else (name.strip(), False)
 
 
 def _natural_key(name: str) -> tuple:
@@ -78,38 +199,70 @@ def _natural_key(name: str) -> tuple:
     return tuple((0, int(part), "") if part.isdigit() else (1, 0, part) for part in re.split(r"(\d+)", name))
 
 
-def _indexed_blocks(path: Path) -> list[tuple[str, trimesh.Trimesh]] | None:
-    """The blocks of a file that stores a block index per triangle; None if it does not.
+def _announced(text) -> tuple[int, int | None, int | None] | None:
+    """(blocks, fixed, triangles) from a :func:`file_header` in ``text``; None without one."""
+    if isinstance(text, bytes):
+        text = text.decode("ascii", errors="replace")
+    match = _HEADER.search(text or "")
+    if match is None:
+        return None
+    return tuple(None if group is None else int(group) for group in match.groups())
 
-    Binary STL with :data:`HEADER_MARKER` (the triangle attribute), PLY with an
-    ``interlock blocks=N`` comment (the face property :data:`BLOCK_DATA`), VTU
-    and XDMF (cell data :data:`BLOCK_DATA`, required).  Block ``k`` is named
-    ``block_k`` (four digits at least).
+
+# --- files with a block index per triangle -------------------------------------
+def _indexed_file(path: Path) -> tuple[MeshFile | None, bool]:
+    """The blocks of a file that stores a block index per triangle; (None, False) if it does not.
+
+    Binary STL with :data:`HEADER_MARKER` (the triangle attribute; its frame
+    in :data:`STL_FIXED_BIT` when the header counts the fixed blocks), PLY
+    with an ``interlock blocks=N`` comment (face properties :data:`BLOCK_DATA`
+    and :data:`FIXED_DATA`), VTU and XDMF (cell data :data:`BLOCK_DATA`,
+    required, and :data:`FIXED_DATA`).  Block ``k`` is named ``block_k``
+    (four digits at least).
     """
-    reader = {".stl": _stl_triangles, ".ply": _ply_triangles, ".vtu": _meshio_triangles,
-              ".xdmf": _meshio_triangles}.get(path.suffix.lower())
-    triangles = None if reader is None else reader(path)
-    return None if triangles is None else _split_by_block(path, *triangles)
+    reader = {".stl": _stl_triangles, ".ply": _ply_triangles}.get(path.suffix.lower(), _meshio_triangles)
+    triangles = reader(path)
+    if triangles is None:
+        return None, False
+    vertices, faces, blocks, fixed, announced = triangles
+    blocks = np.asarray(blocks).astype(np.int64).ravel()
+    if len(blocks) != len(faces):
+        raise AssemblyError(f"{path} gives {len(blocks)} block indices for {len(faces)} triangles")
+    indices = np.unique(blocks)
+    count, fixed_count = (None, None) if announced is None else announced[:2]
+    if count is not None and not np.array_equal(indices, np.arange(count)):
+        found = f"{indices[0]}..{indices[-1]}" if len(indices) else "none"
+        raise AssemblyError(f"{path} announces {count} blocks 0..{count - 1} but its triangles carry "
+                            f"{len(indices)} distinct block indices ({found})")
+    frame = None if fixed is None else _frame(path, blocks, np.ravel(fixed), fixed_count)
+    names = tuple(f"block_{index:04d}" for index in indices.tolist())
+    return MeshFile(names, tuple(group_meshes(vertices, faces, blocks)), frame, len(indices)), True
 
 
 def _stl_triangles(path: Path):
-    """Vertices, faces, block per face and block count of a marked binary STL; None if unmarked."""
+    """Vertices, faces, block and fixed flag per face, and the header of a marked binary STL; None if unmarked."""
     with open(path, "rb") as file:
         header = file.read(80)
         if not header.startswith(HEADER_MARKER):
             return None
         count = int.from_bytes(file.read(4), "little")
         data = file.read()
+    announced = _announced(header)
+    if announced is None:
+        raise AssemblyError(f"{path} says it holds interlock blocks but not how many ({header[:40]!r})")
     if len(data) != count * STL_RECORD.itemsize:
         raise AssemblyError(f"{path} is cut short or padded: its header announces {count} triangles "
                             f"({count * STL_RECORD.itemsize} bytes), it holds {len(data)} bytes")
     records = np.frombuffer(data, dtype=STL_RECORD)
     vertices = records["vertices"].reshape(-1, 3).astype(float)
-    return vertices, np.arange(len(vertices)).reshape(-1, 3), records["block"], _block_count(header, path)
+    faces = np.arange(len(vertices)).reshape(-1, 3)
+    if announced[1] is None:  # written before frames were stored: the attribute is the block index
+        return vertices, faces, records["block"], None, announced
+    return vertices, faces, records["block"] & (STL_FIXED_BIT - 1), records["block"] >= STL_FIXED_BIT, announced
 
 
 def _ply_triangles(path: Path):
-    """Vertices, faces, block per face and block count of a PLY with an interlock comment; None without."""
+    """Vertices, faces, block and fixed flag per face, and the header of a marked PLY; None without the comment."""
     with open(path, "rb") as file:
         header = file.read(4096).split(b"end_header", 1)[0]
         marker = re.search(rb"^comment (" + re.escape(HEADER_MARKER) + rb".*)$", header, re.MULTILINE)
@@ -117,15 +270,19 @@ def _ply_triangles(path: Path):
             return None
         file.seek(0)
         loaded = trimesh.exchange.ply.load_ply(file)
+    announced = _announced(marker.group(1))
+    if announced is None:
+        raise AssemblyError(f"{path} says it holds interlock blocks but not how many ({marker.group(1)[:40]!r})")
     properties = loaded["metadata"]["_ply_raw"]["face"]["data"]  # every face property as read, by name
-    names = properties.dtype.names if isinstance(properties, np.ndarray) else tuple(properties)
-    if BLOCK_DATA not in (names or ()):
+    names = (properties.dtype.names if isinstance(properties, np.ndarray) else tuple(properties)) or ()
+    if BLOCK_DATA not in names:
         raise AssemblyError(f"{path} says it holds interlock blocks but has no face property {BLOCK_DATA!r}")
-    return loaded["vertices"], loaded["faces"], properties[BLOCK_DATA], _block_count(marker.group(1), path)
+    fixed = properties[FIXED_DATA] if FIXED_DATA in names else None
+    return loaded["vertices"], loaded["faces"], properties[BLOCK_DATA], fixed, announced
 
 
 def _meshio_triangles(path: Path):
-    """Vertices, triangles and cell data :data:`BLOCK_DATA` of a VTU or XDMF file (meshio)."""
+    """Vertices, triangles, cell data :data:`BLOCK_DATA` and :data:`FIXED_DATA` of a VTU or XDMF file (meshio)."""
     import meshio  # here, not above: it takes a tenth of a second to import, and few files need it
 
     mesh = meshio.read(path)
@@ -135,32 +292,176 @@ def _meshio_triangles(path: Path):
                             "write it with interlock.gallery.export, or give one mesh file per block")
     faces = np.vstack([mesh.cells[k].data for k in kept])
     blocks = np.concatenate([np.ravel(mesh.cell_data[BLOCK_DATA][k]) for k in kept])
-    return mesh.points[:, :3], faces, blocks, None
+    fixed = None
+    if FIXED_DATA in mesh.cell_data:
+        fixed = np.concatenate([np.ravel(mesh.cell_data[FIXED_DATA][k]) for k in kept]) != 0
+    return mesh.points[:, :3], faces, blocks, fixed, None
 
 
-def _block_count(marker: bytes, path: Path) -> int:
-    """N from ``interlock blocks=N``."""
-    digits = re.match(rb"\d+", marker[len(HEADER_MARKER):])
-    if digits is None:
-        raise AssemblyError(f"{path} says it holds interlock blocks but not how many ({marker[:40]!r})")
-    return int(digits.group())
+# --- files with objects ----------------------------------------------------------
+def _scene_file(path: Path) -> tuple[MeshFile, bool]:
+    """One block per scene node (GLB, 3MF; also plain STL, PLY, ...), node transform applied, named by the node.
+
+    Nodes sort by name (digits as numbers); a name ending in :data:`FIXED_WORD` puts its block in the frame.
+    """
+    scene = trimesh.load_scene(path)
+    nodes = []
+    for node in scene.graph.nodes_geometry:
+        transform, geometry = scene.graph[node]
+        mesh = scene.geometry[geometry]
+        if isinstance(mesh, trimesh.Trimesh) and len(mesh.faces):
+            nodes.append((*_flagged_name(str(node)), transform, mesh))
+    if len(nodes) > 1:
+        nodes.sort(key=lambda node: _natural_key(node[0]))
+    placed = []
+    for _, _, transform, mesh in nodes:
+        vertices = trimesh.transform_points(mesh.vertices, transform)
+        faces = mesh.faces[:, ::-1] if np.linalg.det(transform[:3, :3]) < 0 else mesh.faces  # a reflection
+        placed.append((vertices, faces))
+    if not placed:
+        return MeshFile((), ()), False
+    announced = _scene_header(path, scene)
+    frame = _named_frame(path, [node[1] for node in nodes], announced)
+    offsets = np.cumsum([0] + [len(v) for v, _ in placed])
+    meshes = group_meshes(np.vstack([v for v, _ in placed]), np.vstack([f + o for (_, f), o in zip(placed, offsets)]),
+                     np.repeat(np.arange(len(placed)), [len(f) for _, f in placed]))
+    count = None if announced is None else announced[0]
+    return MeshFile(tuple(node[0] for node in nodes), tuple(meshes), frame, count), len(nodes) > 1
 
 
-def _split_by_block(path: Path, vertices, faces, blocks, count) -> list[tuple[str, trimesh.Trimesh]]:
-    """One mesh per block index (merged vertices), in index order; ``count`` blocks if given."""
-    blocks = np.asarray(blocks).astype(np.int64).ravel()
-    if len(blocks) != len(faces):
-        raise AssemblyError(f"{path} gives {len(blocks)} block indices for {len(faces)} triangles")
-    order = np.argsort(blocks, kind="stable")
-    indices, starts = np.unique(blocks[order], return_index=True)
-    if count is not None and not np.array_equal(indices, np.arange(count)):
-        found = f"{indices[0]}..{indices[-1]}" if len(indices) else "none"
-        raise AssemblyError(f"{path} announces {count} blocks 0..{count - 1} but its triangles carry "
-                            f"{len(indices)} distinct block indices ({found})")
-    bodies = []
-    for index, own in zip(indices.tolist(), np.split(order, starts[1:])):
-        used, local = np.unique(faces[own], return_inverse=True)
-        body = trimesh.Trimesh(vertices[used], local.reshape(-1, 3), process=False)
-        body.merge_vertices()
-        bodies.append((f"block_{index:04d}", body))
-    return bodies
+def _scene_header(path: Path, scene) -> tuple | None:
+    """The :func:`file_header` of a GLB (scene extras) or 3MF (model metadata) file, if any."""
+    if path.suffix.lower() == ".3mf":
+        with zipfile.ZipFile(path) as package:
+            models = [name for name in package.namelist() if name.lower().endswith(".model")]
+            return next(filter(None, (_announced(package.open(name).read(4096)) for name in models)), None)
+    text = scene.metadata.get("interlock") if isinstance(scene.metadata, dict) else None
+    return _announced(text) if isinstance(text, str) else None
+
+
+# --- OBJ -------------------------------------------------------------------------
+@dataclass(frozen=True)
+class _Obj:
+    """The contents of an OBJ file: vertices, polygons (corners face after face), objects and vertex runs."""
+
+    vertices: np.ndarray
+    corners: np.ndarray
+    counts: np.ndarray
+    polygon_object: np.ndarray
+    object_names: tuple[str, ...]
+    vertex_run: np.ndarray
+    announced: tuple | None
+
+
+def _obj_file(path: Path) -> tuple[MeshFile, bool]:
+    """The blocks of an OBJ file: its objects, else its bodies by shared vertex indices, else by ``v`` runs.
+
+    Polygons are triangulated inside their outline
+    (:func:`~interlock.blocks.repair.triangulate_polygons`).  A file of one
+    object whose faces fall into several sets that share no vertex index
+    (Rhino's export of a selection) gives one block per set when each set is
+    a closed surface (T-junctions allowed); else the same with the runs of
+    ``v`` lines each followed by its faces (:func:`_separate`); else one body.
+    """
+    obj = _parse_obj(path)
+    faces, polygon = triangulate_polygons(obj.vertices, obj.corners, obj.counts)
+    blocks, _, triangles = obj.announced or (None, None, None)
+    face_object = obj.polygon_object[polygon]
+    objects = np.unique(face_object)
+    if triangles is not None and triangles != len(faces):
+        raise AssemblyError(f"{path} is cut short or damaged: it announces {blocks} blocks of {triangles} "
+                            f"triangles in all, it holds {len(objects)} objects of {len(faces)} triangles")
+    names, fixed = zip(*(_flagged_name(obj.object_names[k]) for k in objects.tolist())) if len(objects) else ((), ())
+    if len(objects) > 1:  # one block per object, in file order
+        meshes = group_meshes(obj.vertices, faces, np.searchsorted(objects, face_object))
+        return MeshFile(names, tuple(meshes), _named_frame(path, fixed, obj.announced), blocks), True
+    closed, separated = _separate(obj.vertices, faces, obj.vertex_run)
+    frame = _named_frame(path, fixed, obj.announced)
+    if closed is None:
+        mesh = group_meshes(obj.vertices, faces, np.zeros(len(faces), dtype=int))[0]
+        return MeshFile((names[0] if names and names[0] else "body0",), (mesh,), frame, blocks), separated
+    meshes = group_meshes(*closed)
+    frame = None if frame is None else tuple(range(len(meshes))) if frame else ()  # bodies of one object
+    return MeshFile(tuple(f"body{k}" for k in range(len(meshes))), tuple(meshes), frame, blocks), True
+
+
+def _named_frame(path: Path, fixed, announced) -> tuple[int, ...] | None:
+    """The blocks whose names end in :data:`FIXED_WORD`; None if none does and the file has no header."""
+    frame = tuple(k for k, flag in enumerate(fixed) if flag)
+    if announced is not None and announced[1] is not None and announced[1] != len(frame):
+        raise AssemblyError(f"{path} is cut short or damaged: it announces {announced[1]} fixed blocks, its "
+                            f"names mark {len(frame)}")
+    return frame if frame or announced is not None else None
+
+
+def _separate(vertices, faces, vertex_run) -> tuple[tuple | None, bool]:
+    """The blocks of one OBJ object: faces grouped by shared vertex indices, else by ``v`` runs.
+
+    A grouping counts when it has several groups and each is a closed
+    surface (:func:`~interlock.blocks.repair.closed_groups`).  Returns ``((vertices, faces, face groups),
+    True)``, T-junctions split; or ``(None, True)`` when all faces share
+    vertex indices (one body); or ``(None, False)`` when neither grouping holds.
+    """
+    graph = coo_matrix((np.ones(2 * len(faces)), (faces[:, [0, 1]].ravel(), faces[:, [1, 2]].ravel())),
+                       shape=(len(vertices), len(vertices)))
+    component = connected_components(graph, directed=False)[1]
+    by_index = np.unique(component[faces[:, 0]], return_inverse=True)[1].ravel()
+    if by_index.max(initial=0) == 0:
+        return None, True
+    closed = closed_groups(vertices, faces, by_index)
+    if closed is None and (vertex_run[faces] == vertex_run[faces[:, :1]]).all():
+        by_run = np.unique(vertex_run[faces[:, 0]], return_inverse=True)[1].ravel()
+        closed = closed_groups(vertices, faces, by_run) if by_run.max(initial=0) > 0 else None
+    return closed, closed is not None
+
+
+def _parse_obj(path: Path) -> _Obj:
+    """Vertices, polygons, objects and ``v`` runs of an OBJ file (``vt``, ``vn``, groups and materials ignored).
+
+    A run of ``v`` lines starts at a ``v`` line that follows an ``f`` line.
+    Negative indices count back from the last vertex so far.  A malformed
+    last line is dropped (a file cut short); elsewhere it is an error.
+    """
+    lines = path.read_text(errors="replace").splitlines()
+    announced = next(filter(None, (_announced(line) for line in lines[:20] if line.startswith("#"))), None)
+    rows, polygons, seen, objects, runs, names = [], [], [], [], [], [""]
+    run, after_face = 0, False
+    last = max((k for k, line in enumerate(lines) if line.strip()), default=-1)
+    for number, line in enumerate(lines):
+        parts = line.split()
+        if not parts:
+            continue
+        tag = parts[0]
+        try:
+            if tag == "v":
+                if len(parts) < 4:
+                    raise ValueError("a vertex needs three coordinates")
+                rows.append([float(x) for x in parts[1:4]])
+                run += after_face
+                after_face = False
+                runs.append(run)
+            elif tag == "f":
+                corners = [int(token.partition("/")[0]) for token in parts[1:]]
+                if len(corners) < 3:
+                    raise ValueError("a face needs three corners")
+                polygons.append(corners)
+                seen.append(len(rows))
+                objects.append(len(names) - 1)
+                after_face = True
+            elif tag == "o":
+                names.append(line.strip()[1:].strip())
+        except ValueError as error:
+            if number == last:  # the file ends in the middle of this line
+                break
+            raise AssemblyError(f"{path} line {number + 1}: {error}: {line.strip()[:60]!r}") from None
+    counts = np.array([len(p) for p in polygons], dtype=np.int64)
+    corners = np.array([i for p in polygons for i in p], dtype=np.int64)
+    before = np.repeat(np.array(seen, dtype=np.int64), counts)
+    corners = np.where(corners < 0, before + corners, corners - 1)
+    vertices = np.array(rows, dtype=float).reshape(-1, 3)
+    bad = (corners < 0) | (corners >= len(vertices))
+    if bad.any():
+        raise AssemblyError(f"{path} has faces with vertex indices outside 1..{len(vertices)} "
+                            f"(e.g. {corners[bad][0] + 1}); the file is cut short or damaged")
+    return _Obj(vertices, corners, counts, np.array(objects, dtype=np.int64), tuple(names),
+                np.array(runs, dtype=np.int64), announced)

@@ -16,24 +16,32 @@ from trimesh.visual import TextureVisuals
 from trimesh.visual.material import PBRMaterial
 
 from interlock.blocks.assembly import Assembly
-from interlock.blocks.meshfiles import BLOCK_DATA, HEADER_MARKER, STL_RECORD
+from interlock.blocks.meshfiles import (BLOCK_DATA, FIXED_DATA, FIXED_WORD, STL_FIXED_BIT, STL_MAX_FRAMED,
+                                       STL_RECORD, file_header)
 from interlock.errors import GalleryError
 from interlock.gallery import appearance
 
 __all__ = ["export", "FORMATS"]
 
-#: The file formats :func:`export` writes, by suffix, and how each keeps the blocks apart.
+#: The file formats :func:`export` writes, by suffix, and how each keeps the blocks apart and stores the frame.
 FORMATS = {
-    ".stl": "binary STL; block index in each triangle's attribute bytes, 'interlock blocks=N' in the header",
-    ".obj": "Wavefront OBJ; one object 'block_0007' per block, class colours in a .mtl file beside it",
-    ".ply": "binary PLY; one mesh, per-face 'block' index and class colour",
-    ".glb": "binary glTF; one node per block, one mesh per block type and class, class colours",
-    ".3mf": "3MF; one build item per block, one object per block type and class, class colours",
+    ".stl": "binary STL; block index in each triangle's attribute bytes, its top bit set for fixed blocks; "
+            "'interlock blocks=N fixed=K' in the header",
+    ".obj": "Wavefront OBJ; one object per block, 'block_0007' or 'block_0007 fixed'; "
+            "'# interlock blocks=N fixed=K triangles=T'; class colours in a .mtl file beside it",
+    ".ply": "binary PLY; one mesh, per-face 'block' index, 'fixed' flag and class colour; "
+            "'comment interlock blocks=N fixed=K'",
+    ".glb": "binary glTF; one node per block, 'block_0007' or 'block_0007 fixed', one mesh per block type and "
+            "class, class colours; 'interlock blocks=N fixed=K' in the scene extras",
+    ".3mf": "3MF; one build item per block (part number 'block_0007' or 'block_0007 fixed'), one object per block "
+            "type and class, class colours; 'interlock blocks=N fixed=K' in the model metadata",
     ".vtu": "VTK unstructured grid; triangles with cell data block, class, mirrored, fixed",
     ".xdmf": "XDMF with inline XML data; triangles with cell data block, class, mirrored, fixed",
 }
 
-#: The largest block index an STL triangle's 2-byte attribute can hold.
+#: The most blocks an STL file can tell apart: block indices in the triangles' 2-byte attribute.  Up to
+#: :data:`~interlock.blocks.meshfiles.STL_MAX_FRAMED` blocks the top bit of the attribute carries the
+#: frame; beyond, the indices take all 16 bits and the file stores no frame.
 STL_MAX_BLOCKS = np.iinfo(np.uint16).max
 # Turns a mirror-image placement T into the proper one T @ _MIRROR of the mirrored mesh _MIRROR(mesh).
 _MIRROR = np.diag([-1.0, 1.0, 1.0, 1.0])
@@ -43,10 +51,11 @@ def export(obj, path, exploded=0.0) -> Path:
     """Write a block, a mesh or an assembly to a mesh file whose blocks load back apart.
 
     Every format carries the blocks in world coordinates, each outward-oriented
-    (mirror-image blocks included), and a way to tell them apart where they
-    touch; :meth:`Assembly.load <interlock.blocks.Assembly.load>` reads each one
-    back into the same blocks.  Formats with colour colour the blocks by
-    :func:`~interlock.gallery.appearance.block_classes`.
+    (mirror-image blocks included), a way to tell them apart where they
+    touch, and the frame (:data:`FORMATS` says where);
+    :meth:`Assembly.load <interlock.blocks.Assembly.load>` reads each one
+    back into the same blocks with the same frame.  Formats with colour
+    colour the blocks by :func:`~interlock.gallery.appearance.block_classes`.
 
     Parameters
     ----------
@@ -81,6 +90,8 @@ def export(obj, path, exploded=0.0) -> Path:
     ...     back = Assembly.load(path)
     >>> path.name, len(back) == len(grid), bool(np.allclose(back.volumes, grid.volumes))
     ('grid.stl', True, True)
+    >>> back.frame == grid.frame, back.info["frame_from"]
+    (True, 'file')
 
     Notes
     -----
@@ -190,8 +201,20 @@ def _parts(assembly: Assembly) -> tuple[list[trimesh.Trimesh], np.ndarray, np.nd
     return meshes, colours[first], part_of.ravel(), placements
 
 
-def _block_name(i: int) -> str:
-    return f"block_{i:04d}"
+def _block_name(i: int, fixed=()) -> str:
+    """The name of block ``i`` in OBJ objects, GLB nodes and 3MF items: ``block_0007``, ``block_0007 fixed``."""
+    return f"block_{i:04d} {FIXED_WORD}" if i in fixed else f"block_{i:04d}"
+
+
+def _fixed(assembly: Assembly) -> np.ndarray:
+    """Whether each block is in the frame."""
+    fixed = np.zeros(len(assembly), dtype=bool)
+    fixed[list(assembly.frame)] = True
+    return fixed
+
+
+def _header(assembly: Assembly, triangles: int | None = None) -> str:
+    return file_header(len(assembly), len(assembly.frame), triangles)
 
 
 # --- writers -------------------------------------------------------------------
@@ -203,9 +226,13 @@ def _write_stl(assembly: Assembly, path: Path):
     lengths = np.linalg.norm(normals, axis=1, keepdims=True)
     records["normal"] = np.divide(normals, lengths, out=np.zeros_like(normals), where=lengths > 0)
     records["vertices"] = triangles
-    if len(assembly) <= STL_MAX_BLOCKS:
-        records["block"] = _face_blocks(face_start)
-        header = HEADER_MARKER + str(len(assembly)).encode()
+    blocks = _face_blocks(face_start)
+    if len(assembly) <= STL_MAX_FRAMED:
+        records["block"] = blocks | np.where(_fixed(assembly)[blocks], STL_FIXED_BIT, 0)
+        header = _header(assembly).encode()
+    elif len(assembly) <= STL_MAX_BLOCKS:  # the block indices take every bit: no frame
+        records["block"] = blocks
+        header = file_header(len(assembly)).encode()
     else:
         header = b"interlock: too many blocks to index in the triangle attributes"
     with open(path, "wb") as file:
@@ -223,13 +250,15 @@ def _write_obj(assembly: Assembly, path: Path):
         for c in np.unique(classes):
             rgba = colours[np.argmax(classes == c)] / 255
             file.write(f"newmtl class_{c}\nKd {rgba[0]:.6f} {rgba[1]:.6f} {rgba[2]:.6f}\nd {rgba[3]:.6f}\n\n")
+    frame = set(assembly.frame)
     with open(path, "w") as file:
-        file.write(f"# interlock: {len(assembly)} blocks, one object each; materials by {kind}\n")
+        file.write(f"# {_header(assembly, len(faces))}\n")
+        file.write(f"# one object per block, named 'fixed' in the frame; materials by {kind}\n")
         file.write(f"mtllib {materials.name}\n")
         for i in range(len(assembly)):
             block_vertices = vertices[vertex_start[i]:vertex_start[i + 1]]
             block_faces = faces[face_start[i]:face_start[i + 1]] + 1
-            file.write(f"o {_block_name(i)}\nusemtl class_{classes[i]}\n")
+            file.write(f"o {_block_name(i, frame)}\nusemtl class_{classes[i]}\n")
             file.write("v %r %r %r\n" * len(block_vertices) % tuple(block_vertices.ravel().tolist()))
             file.write("f %d %d %d\n" * len(block_faces) % tuple(block_faces.ravel().tolist()))
 
@@ -239,16 +268,19 @@ def _write_ply(assembly: Assembly, path: Path):
     blocks = _face_blocks(face_start)
     colours = appearance.block_colours(assembly)[blocks]
     face_records = np.zeros(len(faces), dtype=[("count", "u1"), ("vertex_indices", "<i4", 3), (BLOCK_DATA, "<i4"),
-                                               ("red", "u1"), ("green", "u1"), ("blue", "u1"), ("alpha", "u1")])
+                                               (FIXED_DATA, "u1"), ("red", "u1"), ("green", "u1"), ("blue", "u1"),
+                                               ("alpha", "u1")])
     face_records["count"] = 3
     face_records["vertex_indices"] = faces
     face_records[BLOCK_DATA] = blocks
+    face_records[FIXED_DATA] = _fixed(assembly)[blocks]
     for k, channel in enumerate(("red", "green", "blue", "alpha")):
         face_records[channel] = colours[:, k]
     header = "\n".join([
-        "ply", "format binary_little_endian 1.0", f"comment {HEADER_MARKER.decode()}{len(assembly)}",
+        "ply", "format binary_little_endian 1.0", f"comment {_header(assembly)}",
         f"element vertex {len(vertices)}", "property double x", "property double y", "property double z",
         f"element face {len(faces)}", "property list uchar int vertex_indices", f"property int {BLOCK_DATA}",
+        f"property uchar {FIXED_DATA}",
         "property uchar red", "property uchar green", "property uchar blue", "property uchar alpha",
         "end_header", ""])
     with open(path, "wb") as file:
@@ -265,9 +297,11 @@ def _write_glb(assembly: Assembly, path: Path):
         part.visual = TextureVisuals(material=PBRMaterial(name=f"part_{k}", baseColorFactor=rgba,
                                                           metallicFactor=0.0, roughnessFactor=0.8))
         scene.geometry[f"part_{k}"] = part
+    frame = set(assembly.frame)
     for i, (k, placement) in enumerate(zip(part_of, placements)):
-        scene.graph.update(frame_from=scene.graph.base_frame, frame_to=_block_name(i), matrix=placement,
+        scene.graph.update(frame_from=scene.graph.base_frame, frame_to=_block_name(i, frame), matrix=placement,
                            geometry=f"part_{k}")
+    scene.metadata["interlock"] = _header(assembly)  # the scene's extras
     path.write_bytes(scene.export(file_type="glb"))
 
 
@@ -276,7 +310,9 @@ def _write_3mf(assembly: Assembly, path: Path):
     model = io.StringIO()
     model.write('<?xml version="1.0" encoding="UTF-8"?>\n'
                 '<model unit="millimeter" xml:lang="en-US" '
-                'xmlns="http://schemas.microsoft.com/3dmanufacturing/core/2015/02">\n<resources>\n'
+                'xmlns="http://schemas.microsoft.com/3dmanufacturing/core/2015/02" '
+                f'xmlns:interlock="{_3MF_NAMESPACE}">\n'
+                f'<metadata name="interlock:header">{_header(assembly)}</metadata>\n<resources>\n'
                 '<basematerials id="1">\n')
     for k, rgba in enumerate(colours):
         model.write(f'<base name="part_{k}" displaycolor="#{bytes(rgba.tolist()).hex().upper()}"/>\n')
@@ -288,10 +324,11 @@ def _write_3mf(assembly: Assembly, path: Path):
         model.write('<triangle v1="%d" v2="%d" v3="%d"/>\n' * len(mesh.faces) % tuple(mesh.faces.ravel().tolist()))
         model.write("</triangles>\n</mesh>\n</object>\n")
     model.write("</resources>\n<build>\n")
+    frame = set(assembly.frame)
     for i, (k, placement) in enumerate(zip(part_of, placements)):
         # 3MF multiplies row vectors: the 4x3 matrix is the transpose of the top 3x4 of ours
         transform = " ".join(map(repr, placement[:3, :4].T.ravel().tolist()))
-        model.write(f'<item objectid="{k + 2}" transform="{transform}" partnumber="{_block_name(i)}"/>\n')
+        model.write(f'<item objectid="{k + 2}" transform="{transform}" partnumber="{_block_name(i, frame)}"/>\n')
     model.write("</build>\n</model>\n")
     with zipfile.ZipFile(path, "w", compression=zipfile.ZIP_DEFLATED) as package:
         package.writestr("[Content_Types].xml", _3MF_CONTENT_TYPES)
@@ -299,6 +336,8 @@ def _write_3mf(assembly: Assembly, path: Path):
         package.writestr("3D/3dmodel.model", model.getvalue())
 
 
+# Custom 3MF metadata names need a namespace of their own.
+_3MF_NAMESPACE = "urn:interlock:3mf"
 _3MF_CONTENT_TYPES = """<?xml version="1.0" encoding="UTF-8"?>
 <Types xmlns="http://schemas.openxmlformats.org/package/2006/content-types">
 <Default Extension="rels" ContentType="application/vnd.openxmlformats-package.relationships+xml"/>
@@ -316,10 +355,9 @@ def _write_meshio(assembly: Assembly, path: Path):
     vertices, faces, _, face_start = _world(assembly)
     blocks = _face_blocks(face_start)
     classes, _ = appearance.block_classes(assembly)
-    fixed = np.zeros(len(assembly), dtype=np.int64)
-    fixed[list(assembly.frame)] = 1
     cell_data = {BLOCK_DATA: [blocks], "class": [classes[blocks].astype(np.int64)],
-                 "mirrored": [assembly.mirrored[blocks].astype(np.int64)], "fixed": [fixed[blocks]]}
+                 "mirrored": [assembly.mirrored[blocks].astype(np.int64)],
+                 FIXED_DATA: [_fixed(assembly)[blocks].astype(np.int64)]}
     mesh = meshio.Mesh(vertices, [("triangle", faces)], cell_data=cell_data)
     if path.suffix.lower() == ".xdmf":
         meshio.write(path, mesh, file_format="xdmf", data_format="XML")

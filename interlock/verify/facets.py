@@ -14,8 +14,9 @@ from scipy.sparse.csgraph import connected_components
 
 from interlock.blocks.assembly import Assembly
 from interlock.blocks.contact import ContactError, plane_bases
+from interlock.blocks.repair import merge_vertices
 
-__all__ = ["Facets", "FacetTable", "facets", "clean_polygons", "check_tolerance", "DEFAULT_CONTACT_RTOL",
+__all__ = ["Facets", "FacetTable", "facets", "merged", "clean_polygons", "check_tolerance", "DEFAULT_CONTACT_RTOL",
            "DEFAULT_ANGLE_TOL", "PLANAR_ULPS", "TINY"]
 
 #: Distance tolerance relative to the model size: two planes closer than this
@@ -97,8 +98,7 @@ def facets(mesh: trimesh.Trimesh, atol: float | None = None, angle_tol: float = 
     """
     if not isinstance(mesh, trimesh.Trimesh):
         raise ContactError(f"facets() needs a trimesh.Trimesh, got {type(mesh).__name__}")
-    mesh = mesh.copy()
-    mesh.merge_vertices(merge_tex=True, merge_norm=True)
+    mesh = merged(mesh)
     atol = DEFAULT_CONTACT_RTOL * mesh.scale if atol is None else check_tolerance("atol", atol)
     return _facets(mesh, atol, check_tolerance("angle_tol", angle_tol))
 
@@ -117,8 +117,7 @@ class FacetTable:
         types = assembly.types
         per_type = {}
         for t in np.unique(types):
-            mesh = assembly.meshes[t].copy()
-            mesh.merge_vertices(merge_tex=True, merge_norm=True)
+            mesh = merged(assembly.meshes[t])
             per_type[t] = _facets(mesh, atol, angle_tol)
         counts = np.array([len(per_type[t]) for t in types])
         self.start = np.concatenate([[0], np.cumsum(counts)])
@@ -148,6 +147,17 @@ class FacetTable:
                 self.polygons[rows] = np.tile(polygons, len(blocks))
                 self.flatness[rows] = np.tile(f.flatness, len(blocks))
                 self.planar[rows] = np.tile(f.planar, len(blocks))
+
+
+def merged(mesh: trimesh.Trimesh) -> trimesh.Trimesh:
+    """A copy of ``mesh`` with coincident vertices merged on a grid relative to its size (any scale).
+
+    trimesh's own merge rounds to an absolute 1e-8, which fuses every vertex of
+    a model 1e-8 across and overflows on one 1e12 across
+    (:func:`~interlock.blocks.repair.merge_vertices` instead).
+    """
+    vertices, faces = merge_vertices(mesh.vertices, mesh.faces)
+    return trimesh.Trimesh(vertices, faces, process=False)
 
 
 # --- private helpers --------------------------------------------------------------------------------

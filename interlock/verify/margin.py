@@ -35,15 +35,20 @@ import scipy.optimize
 import scipy.sparse as sp
 import scipy.sparse.linalg
 
-__all__ = ["Margin", "assess", "input_precision", "row_tolerances", "margin_lower_bound", "tolerant_motion", "GRID_BITS",
-           "DECIMAL_DIGITS", "PRECISION_FACTOR", "MARGIN_CHUNK", "EXACT_RTOL", "TOLERANT_SHARE", "BEND_FACTOR"]
+__all__ = ["Margin", "assess", "input_precision", "row_tolerances", "margin_lower_bound", "tolerant_motion",
+           "GRID_BITS", "DECIMAL_MIN_RTOL", "DECIMAL_MAX_RTOL", "DECIMAL_FULL_SHARE", "PRECISION_FACTOR",
+           "MARGIN_CHUNK", "EXACT_RTOL", "TOLERANT_SHARE", "BEND_FACTOR"]
 
 #: Coordinates that are all multiples of a power of two with at most this many significant bits lie on a
 #: grid (voxel puzzles, generated lattices): they are taken as exact, whatever type they were stored in.
 GRID_BITS = 20
-#: Text formats round to decimals: coordinates that are all decimals with at most this many digits after
-#: the point are taken as rounded to half a unit in the last digit.
-DECIMAL_DIGITS = 9
+#: Text formats round to decimals: coordinates that are all multiples of a power of ten ``q`` with
+#: ``DECIMAL_MIN_RTOL <= q / max |x| <= DECIMAL_MAX_RTOL`` (at least four significant digits), whose last digit
+#: is used by at least ``DECIMAL_FULL_SHARE`` of them (numbers cut to that digit, not a designer's round
+#: values), are taken as rounded to ``q / 2``.  Coarser round values (0.25, 1.5) are exact, not rounding.
+DECIMAL_MIN_RTOL = 1e-12
+DECIMAL_MAX_RTOL = 1e-4
+DECIMAL_FULL_SHARE = 0.5
 #: The tolerance is this many times the rounding (a vertex moved by ``delta`` per coordinate moves by up to
 #: ``sqrt(3) delta``; two faces in contact each carry their own rounding).
 PRECISION_FACTOR = 4.0
@@ -93,8 +98,9 @@ def input_precision(vertices) -> tuple[float, str]:
     :data:`GRID_BITS` significant bits, e.g. multiples of 1/16): exact
     ("grid", ``delta`` the float64 rounding of the largest); all exactly
     float32 numbers: ``delta = 2^-24 max |x|`` ("float32", what STL files
-    hold); all decimals with ``d <= DECIMAL_DIGITS`` digits: ``delta = 10^-d / 2``
-    ("decimals"); else ``delta = 2^-53 max |x|`` ("float64").
+    hold); all decimals cut to a quantum ``q`` of at least four significant
+    digits (:data:`DECIMAL_MAX_RTOL`, the last digit mostly used):
+    ``delta = q / 2`` ("decimals"); else ``delta = 2^-53 max |x|`` ("float64").
 
     Examples
     --------
@@ -104,8 +110,10 @@ def input_precision(vertices) -> tuple[float, str]:
     >>> delta, source = input_precision(np.float32(np.random.default_rng(0).random((9, 3))).astype(float))
     >>> source, delta < 6e-8
     ('float32', True)
-    >>> input_precision(np.array([[0.123456, 1.1, 2.0]]))
+    >>> input_precision(np.array([[0.123456, 1.100003, 2.000001]]))
     (5e-07, 'decimals')
+    >>> input_precision(np.array([[0.2, 0.4, 0.1]]))[1]  # round values are exact, not rounded
+    'float64'
     """
     x = np.asarray(vertices, dtype=float).ravel()
     x = x[np.isfinite(x)]
@@ -115,10 +123,13 @@ def input_precision(vertices) -> tuple[float, str]:
         return top * 2.0**-53, "grid"
     if np.all(x.astype(np.float32).astype(float) == x):
         return top * 2.0**-24, "float32"
-    for digits in range(1, DECIMAL_DIGITS + 1):
-        scaled = x * 10.0**digits
-        if np.all(np.abs(scaled - np.round(scaled)) <= 1e-9 * np.maximum(1.0, np.abs(scaled))):
-            return 0.5 * 10.0**-digits, "decimals"
+    for digits in range(-15, 31):  # the coarsest decimal quantum 10^-digits that the numbers are cut to
+        quantum = 10.0**-digits
+        if not DECIMAL_MIN_RTOL <= quantum / top <= DECIMAL_MAX_RTOL:
+            continue
+        units = np.round(x / quantum)
+        if np.all(np.abs(x / quantum - units) <= 1e-4) and np.mean(units % 10 != 0) >= DECIMAL_FULL_SHARE:
+            return 0.5 * quantum, "decimals"
     return top * 2.0**-53, "float64"
 
 

@@ -6,6 +6,7 @@ import trimesh
 
 from interlock import InterlockError, wallpaper
 from interlock.blocks import Assembly, AssemblyError, escher_block, patch, periodic_cell
+from interlock.blocks.repair import unmatched_edges
 
 
 def _row_of_cubes(n=3):
@@ -151,3 +152,73 @@ def test_world_meshes_keep_volume_and_orientation_when_mirrored():
         assert m.is_winding_consistent and m.volume == pytest.approx(block.volume)
     with pytest.raises(AssemblyError, match="out of range"):
         p.mesh(len(p))
+
+
+CUBE_PARTS = 9
+#: The TopoLite cube is a 4 x 4 x 4 voxel puzzle of voxels of side 0.2: 64 * 0.2**3 = 0.512.
+CUBE_VOXEL = 0.2
+
+
+def test_topolite_cube_parts_with_t_junctions_load_closed(reference_data):
+    folder = reference_data / "topolite" / "cube"
+    a = Assembly.load([folder / f"part_{k}.obj" for k in range(1, CUBE_PARTS + 1)])
+    assert len(a) == CUBE_PARTS and a.info["frame_from"] == "none"
+    assert all(len(unmatched_edges(mesh.faces)) == 0 for mesh in a.meshes)
+    assert (a.volumes > 0).all()
+    voxels = a.volumes / CUBE_VOXEL ** 3
+    np.testing.assert_allclose(voxels, voxels.round(), atol=1e-9)
+    assert voxels.round().tolist() == [7] * 7 + [8, 7] and voxels.sum() == pytest.approx(4 ** 3)
+    # their polygons are non-convex: the triangles cover each one exactly (a fan would add area)
+    assert sum(mesh.area for mesh in a.meshes) == pytest.approx(sum(_outline_areas(folder / f"part_{k}.obj")
+                                                                    for k in range(1, CUBE_PARTS + 1)))
+
+
+def _outline_areas(path):
+    """Sum of the areas of an OBJ file's polygons (Newell's formula: exact for planar polygons)."""
+    lines = path.read_text().splitlines()
+    vertices = np.array([line.split()[1:4] for line in lines if line.startswith("v ")], dtype=float)
+    total = 0.0
+    for line in lines:
+        if line.startswith("f "):
+            p = vertices[[int(token.split("/")[0]) - 1 for token in line.split()[1:]]]
+            total += np.linalg.norm(np.cross(p, np.roll(p, -1, axis=0)).sum(axis=0)) / 2
+    return total
+
+
+def _cube_with_a_t_junction():
+    """A unit cube, one bottom triangle cut in two at the middle of its side: a T-junction with the side face."""
+    cube = trimesh.creation.box()
+    vertices = cube.vertices
+    for k, face in enumerate(cube.faces):
+        for shift in range(3):
+            u, v, w = np.roll(face, -shift)
+            bottom = (vertices[[u, v, w], 2] == -0.5).all()
+            if bottom and np.count_nonzero(vertices[u] != vertices[v]) == 1:  # a side of the square, not its diagonal
+                cut = np.vstack([np.delete(cube.faces, k, axis=0), [[u, 8, w], [8, v, w]]])
+                return np.vstack([vertices, (vertices[u] + vertices[v]) / 2]), cut
+
+
+def test_a_box_missing_a_triangle_is_refused_also_with_t_junctions():
+    cube = trimesh.creation.box()
+    with pytest.raises(AssemblyError, match=r"block 0 is not a closed, consistently oriented surface \(3 edges"):
+        Assembly.from_meshes([trimesh.Trimesh(cube.vertices, cube.faces[:-1], process=False)])
+    vertices, faces = _cube_with_a_t_junction()
+    assert len(unmatched_edges(faces)) > 0
+    assert Assembly.from_meshes([trimesh.Trimesh(vertices, faces, process=False)]).volumes[0] == pytest.approx(1.0)
+    top = np.flatnonzero((vertices[faces][:, :, 2] == 0.5).all(axis=1))[0]
+    with pytest.raises(AssemblyError, match="also after splitting edges at the vertices on them"):
+        Assembly.from_meshes([trimesh.Trimesh(vertices, np.delete(faces, top, axis=0), process=False)])
+
+
+def test_a_list_of_files_takes_the_frame_its_files_store(tmp_path):
+    paths = []
+    for k, mesh in enumerate(_row_of_cubes()):
+        path = tmp_path / f"part_{k}.obj"
+        name = "part fixed" if k == 2 else "part"
+        path.write_text(f"o {name}\n" + "".join(f"v {x} {y} {z}\n" for x, y, z in mesh.vertices)
+                        + "".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in mesh.faces))
+        paths.append(path)
+    a = Assembly.load(paths)
+    assert a.frame == (2,) and a.info["frame_from"] == "file"
+    b = Assembly.load(paths, frame=[0])
+    assert b.frame == (0,) and b.info["frame_from"] == "argument"

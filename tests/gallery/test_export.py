@@ -1,5 +1,6 @@
 """Exports: every format loads back into the same blocks; orientation, colours, cell data, exploded views, errors."""
 
+import math
 import os
 import time
 import xml.etree.ElementTree as ET
@@ -13,6 +14,7 @@ import trimesh
 from interlock import wallpaper
 from interlock.blocks import Assembly, AssemblyError, escher_block, patch, random_hexagon, rhomblock, rhomblock_assembly
 from interlock.blocks.assembly import HEADER_MARKER, STL_RECORD
+from interlock.blocks.meshfiles import STL_FIXED_BIT, STL_MAX_FRAMED
 from interlock.errors import GalleryError
 from interlock.gallery.appearance import PALETTE, block_classes, block_colours
 from interlock.gallery.export import FORMATS, STL_MAX_BLOCKS, export
@@ -50,11 +52,88 @@ def test_every_format_loads_back_the_same_blocks(tmp_path, assemblies, name, suf
     np.testing.assert_allclose(back.centroids, assembly.centroids, atol=1e-6 * assembly.scale)
 
 
+@pytest.fixture(scope="module")
+def framed():
+    """Assemblies with their natural frame, as ``interlock generate`` writes them: a p4 patch of radius 2 cells
+    (69 blocks, 24 in the frame) and RhomBlocks on a random 3 x 3 x 3 hexagon (ring frame)."""
+    group = wallpaper.group("p4")
+    p4 = patch(escher_block(group, {0: [(0.25, 0.1)]}), 2 * math.sqrt(group.cell_area), frame="boundary")
+    hexagon = rhomblock_assembly(random_hexagon(3, 3, 3, seed=0), frame="boundary")
+    assert (len(p4), len(p4.frame)) == (69, 24) and 0 < len(hexagon.frame) < len(hexagon)
+    return {"p4": p4, "hexagon": hexagon}
+
+
+@pytest.mark.parametrize("suffix", list(FORMATS))
+@pytest.mark.parametrize("name", ["p4", "hexagon"])
+def test_the_frame_round_trips_through_every_format(tmp_path, framed, name, suffix):
+    assembly = framed[name]
+    path = export(assembly, tmp_path / f"{name}{suffix}")
+    back = Assembly.load(path)
+    assert back.frame == assembly.frame and back.info["frame_from"] == "file"
+    np.testing.assert_allclose(back.centroids, assembly.centroids, atol=1e-6 * assembly.scale)
+    other = Assembly.load(path, frame=[0])
+    assert other.frame == (0,) and other.info["frame_from"] == "argument"
+    unfixed = Assembly.load(export(assembly.with_frame([]), tmp_path / f"free{suffix}"))
+    assert unfixed.frame == () and unfixed.info["frame_from"] == "file"
+
+
+def test_where_each_format_stores_the_frame(tmp_path, framed):
+    p4 = framed["p4"]
+    fixed = np.isin(np.arange(len(p4)), p4.frame)
+    path = export(p4, tmp_path / "p4.stl")
+    assert path.read_bytes()[:80].rstrip() == b"interlock blocks=69 fixed=24"
+    records = np.fromfile(path, dtype=STL_RECORD, offset=84)
+    blocks = records["block"] & (STL_FIXED_BIT - 1)
+    np.testing.assert_array_equal(records["block"] >= STL_FIXED_BIT, fixed[blocks])
+    obj = export(p4, tmp_path / "p4.obj").read_text().splitlines()
+    assert obj[0] == f"# interlock blocks=69 fixed=24 triangles={len(records)}"
+    assert [line for line in obj if line.startswith("o ")][44:46] == ["o block_0044", "o block_0045 fixed"]
+    ply = trimesh.load(export(p4, tmp_path / "p4.ply"), process=False)
+    raw = ply.metadata["_ply_raw"]["face"]["data"]
+    np.testing.assert_array_equal(raw["fixed"].astype(bool), fixed[raw["block"]])
+    scene = trimesh.load_scene(export(p4, tmp_path / "p4.glb"))
+    assert scene.metadata["interlock"] == "interlock blocks=69 fixed=24"
+    assert sorted(n for n in scene.graph.nodes_geometry if n.endswith(" fixed")) == [
+        f"block_{i:04d} fixed" for i in p4.frame]
+    with zipfile.ZipFile(export(p4, tmp_path / "p4.3mf")) as package:
+        model = ET.fromstring(package.read("3D/3dmodel.model"))
+    ns = {"m": "http://schemas.microsoft.com/3dmanufacturing/core/2015/02"}
+    assert model.find("m:metadata", ns).text == "interlock blocks=69 fixed=24"
+    assert model.find("m:metadata", ns).get("name") == "interlock:header"
+    parts = [item.get("partnumber") for item in model.iterfind("m:build/m:item", ns)]
+    assert [k for k, part in enumerate(parts) if part.endswith(" fixed")] == list(p4.frame)
+
+
+def test_stl_beyond_the_frame_bit_keeps_block_indices_without_a_frame(tmp_path):
+    n = STL_MAX_FRAMED + 1
+    transforms = np.tile(np.eye(4), (n, 1, 1))
+    transforms[:, 0, 3] = 2 * np.arange(n)
+    assembly = Assembly([trimesh.creation.box()], np.zeros(n, dtype=int), transforms, frame=[0])
+    path = export(assembly, tmp_path / "many.stl")
+    assert path.read_bytes()[:80].rstrip() == f"interlock blocks={n}".encode()
+    records = np.fromfile(path, dtype=STL_RECORD, offset=84)
+    np.testing.assert_array_equal(records["block"], np.repeat(np.arange(n), 12))
+
+
+def test_a_file_announcing_other_fixed_blocks_than_it_marks_is_an_error(tmp_path, framed):
+    path = export(framed["p4"], tmp_path / "p4.stl")
+    data = bytearray(path.read_bytes())
+    data[:80] = b"interlock blocks=69 fixed=25".ljust(80)
+    path.write_bytes(bytes(data))
+    with pytest.raises(AssemblyError, match="announces 25 fixed blocks, its triangles mark 24"):
+        Assembly.load(path)
+    records = np.frombuffer(bytes(data[84:]), dtype=STL_RECORD).copy()
+    records["block"][0] ^= STL_FIXED_BIT  # one triangle of block 0 says fixed, the others not
+    path.write_bytes(bytes(data[:84]) + records.tobytes())
+    with pytest.raises(AssemblyError, match="marks only some triangles of block 0 as fixed"):
+        Assembly.load(path)
+
+
 def test_mirror_image_blocks_are_written_outward(tmp_path, assemblies):
     pg = assemblies["pg"]
     records = np.fromfile(export(pg, tmp_path / "pg.stl"), dtype=STL_RECORD, offset=84)
     a, b, c = np.moveaxis(records["vertices"].astype(float), 1, 0)
-    signed = np.bincount(records["block"], np.einsum("ij,ij->i", a, np.cross(b, c)) / 6, minlength=len(pg))
+    signed = np.bincount(records["block"] & (STL_FIXED_BIT - 1), np.einsum("ij,ij->i", a, np.cross(b, c)) / 6, minlength=len(pg))
     np.testing.assert_allclose(signed, pg.volumes, rtol=1e-6)
 
     scene = trimesh.load_scene(export(pg, tmp_path / "pg.glb"))

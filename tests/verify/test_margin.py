@@ -105,3 +105,23 @@ def test_a_motion_shown_within_tolerance_is_never_called_interlocked(bunny, ampl
     shown = finite_motion(noisy, exact.motion, frame=[1])
     if shown.shown:
         assert check(noisy, frame=[1]).interlocked is not True
+
+
+def _scaled(assembly, factor, frame):
+    return Assembly.from_meshes([m.copy().apply_scale(factor) for m in assembly.world_meshes()], frame=frame)
+
+
+@pytest.mark.parametrize("factor", [1e-9, 1e-4, 1e6, 1e12])
+def test_verdicts_identical_from_1e_minus_9_to_1e12(factor):
+    """Tolerances are relative everywhere: contacts, vertex merging, precision and margin."""
+    from interlock.blocks import presets, random_hexagon, rhomblock_assembly
+
+    patch = rhomblock_assembly(random_hexagon(3, 3, 3, seed=0))
+    cases = [(patch, patch.boundary()), (presets.cube_grid(), presets.cube_grid().frame),
+             (presets.interlocking_cubes(), presets.interlocking_cubes().frame)]
+    for assembly, frame in cases:
+        reference = check(_scaled(assembly, 1.0, frame))
+        scaled = check(_scaled(assembly, factor, frame))
+        assert (scaled.interlocked, scaled.contacts, scaled.rank, scaled.moving) == \
+            (reference.interlocked, reference.contacts, reference.rank, reference.moving)
+    assert reference.interlocked is True and reference.contacts == 16
