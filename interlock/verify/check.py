@@ -38,6 +38,8 @@ LP_TOL = 1e-7
 #: Solvers for the stress LP. Clarabel (direct sparse LDL^T, feasibility form) took 24 s on the stress LP of a
 #: 4,800-block RhomBlock hexagon where HiGHS' interior-point method took 206 s; HiGHS is the fallback.
 LP_SOLVERS = ("clarabel", "highs")
+#: Rows of the stress problem's Farkas certificate below this fraction of its largest row are closed.
+FARKAS_CLOSED_RTOL = 1e-6
 #: Blocks whose twist is below this fraction of the largest one do not move.
 MOVING_RTOL = 1e-6
 #: The stages of :func:`check`, in order, as reported to its ``progress`` callback and in ``timings``.
@@ -241,8 +243,14 @@ def check(assembly: Assembly, frame=None, translational: bool = False, certify: 
         with _stage(timings, "rank", progress):
             rank, kernel, rank_clear = _rank(A.matrix, rank_rtol)
         with _stage(timings, "lp", progress):
-            stress, tolerances["lp_solver"] = _positive_stress(A.matrix, lp_tol, lp_solver)
-            lp_value, lp_motion = (0.0, None) if stress is not None else _motion_lp(A.matrix, lp_tol)
+            stress, tolerances["lp_solver"], farkas = _positive_stress(A.matrix, lp_tol, lp_solver)
+            if stress is not None:
+                lp_value, lp_motion = 0.0, None
+            else:  # the stress problem's own infeasibility certificate is a motion; the LP only if it is not clean
+                lp_value, lp_motion = _farkas_motion(A.matrix, farkas, lp_tol)
+                tolerances["motion_from"] = "farkas" if lp_motion is not None else "lp"
+                if lp_motion is None:
+                    lp_value, lp_motion = _motion_lp(A.matrix, lp_tol)
 
     n = A.shape[1]
     no_frame = " (no frame: a finite assembly without fixed blocks can always move as a whole)" if not fixed else ""
@@ -417,7 +425,10 @@ def _sparse_rank(A: sp.csr_matrix, rtol: float):
 
 
 def _positive_stress(A: sp.csr_matrix, tol: float, solver: str = "clarabel"):
-    """``(w, solver used)``: ``w >= 1`` with ``A^T w = 0`` (Stiemke), or None when there is none.
+    """``(w, solver used, certificate)``: ``w >= 1`` with ``A^T w = 0`` (Stiemke), or None when there is none.
+
+    When Clarabel proves there is none, ``certificate`` is its Farkas vector
+    (see :func:`_farkas_motion`), else None.
 
     Clarabel solves the feasibility problem; HiGHS' interior-point method
     minimises ``sum(w)`` (asked for, or when Clarabel neither solves nor
@@ -426,21 +437,21 @@ def _positive_stress(A: sp.csr_matrix, tol: float, solver: str = "clarabel"):
     """
     m = A.shape[0]
     if m == 0:
-        return None, "none"
-    w, status = _stress_clarabel(A) if solver == "clarabel" else (None, "not run")
+        return None, "none", None
+    w, status, farkas = _stress_clarabel(A) if solver == "clarabel" else (None, "not run", None)
     if status == "PrimalInfeasible":
-        return None, "clarabel"
+        return None, "clarabel", farkas
     if w is None:
         result = scipy.optimize.linprog(np.ones(m), A_eq=A.T.tocsr(), b_eq=np.zeros(A.shape[1]), bounds=(1, None),
                                         method="highs-ipm", options={"primal_feasibility_tolerance": tol,
                                                                      "dual_feasibility_tolerance": tol})
         w, solver = (result.x if result.status == 0 else None), "highs-ipm"
     if w is None:
-        return None, solver
+        return None, solver, None
     residual = np.abs(A.T @ w).max(initial=0.0)
     if w.min() < 1 - tol or residual > tol * np.abs(w).max():
-        return None, solver
-    return w, solver
+        return None, solver, None
+    return w, solver, None
 
 
 def _stress_clarabel(A: sp.csr_matrix):
@@ -464,7 +475,32 @@ def _stress_clarabel(A: sp.csr_matrix):
                                     [clarabel.ZeroConeT(n), clarabel.NonnegativeConeT(m)], settings)
     solution = solver.solve()
     status = str(solution.status)
-    return (np.asarray(solution.x) if status == "Solved" else None), status
+    farkas = np.asarray(solution.z)[:n] if status == "PrimalInfeasible" else None
+    return (np.asarray(solution.x) if status == "Solved" else None), status, farkas
+
+
+def _farkas_motion(A: sp.csr_matrix, x, tol: float):
+    """``(value, x)`` from the stress problem's infeasibility certificate, or ``(None, None)`` if it is not clean.
+
+    Clarabel proves ``A^T w = 0, w >= 1`` infeasible by a dual ``z = (x, A x)``
+    with ``A x >= 0`` and ``1^T A x > 0`` (Farkas): a motion that opens
+    contacts.  It is accepted when no row is below ``-tol`` times its largest
+    row; the value is ``1^T A x / max(A x)``, a lower bound on the motion LP's.
+    """
+    if x is None or not len(x):
+        return None, None
+    y = A @ x
+    top = float(y.max(initial=0.0))
+    if not top > 0 or y.min() < -tol * top:
+        return None, None
+    closed = np.flatnonzero(y <= FARKAS_CLOSED_RTOL * top)
+    if len(closed):  # an interior point leaves closed rows at ~1e-10, not 0: project them shut
+        x = x - scipy.sparse.linalg.lsqr(A[closed], y[closed], atol=1e-15, btol=1e-15, iter_lim=10 * A.shape[1])[0]
+        y = A @ x
+        top = float(y.max(initial=0.0))
+        if not top > 0 or y.min() < -tol * top:
+            return None, None
+    return float(y.sum() / top), x / top
 
 
 def _motion_lp(A: sp.csr_matrix, tol: float):

@@ -257,3 +257,17 @@ def test_verdict_serialises_and_prints():
     assert record["interlocked"] is False and record["rank"] == 5 and record["motion_kind"] == "sliding"
     assert set(record["tolerances"]) >= {"rank_rtol", "lp_tol"} and "lp" in record["timings"]
     assert str(v).startswith("not infinitesimally interlocked: block 4 has a first-order motion")
+
+
+def test_a_rhomblock_hexagon_with_one_fixed_block_is_not_interlocked():
+    """432 blocks, block 0 fixed: the motion comes from the stress problem's Farkas certificate (issue 21)."""
+    from interlock.blocks import random_hexagon, rhomblock_assembly
+
+    hexagon = rhomblock_assembly(random_hexagon(12, 12, 12, seed=0))
+    v = check(hexagon, frame=[0], validate=False)
+    assert v.interlocked is False and v.motion_kind == "opening" and v.tolerances["motion_from"] == "farkas"
+    A = interlocking_matrix(hexagon, [0]).matrix
+    columns = v.motion[1:].copy()
+    columns[:, 3:] /= interlocking_matrix(hexagon, [0]).length_scale
+    y = A @ columns.ravel()
+    assert y.min() >= -1e-7 * y.max() and y.max() > 0 and len(v.moving) == len(hexagon) - 1
