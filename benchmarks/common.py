@@ -194,8 +194,25 @@ def naive_stress(matrix) -> bool:
     return result.status == 0 and -result.fun > 0.5
 
 
-def naive_verdict(assembly: Assembly) -> tuple[bool, dict]:
-    """(interlocked, seconds per stage of :data:`NAIVE_STAGES`) of the naive baseline on a fresh copy."""
+def naive_motion(matrix) -> bool:
+    """Whether a motion opens contacts: ``max 1^T A x`` subject to ``0 <= A x <= 1``, HiGHS' simplex on ``[A; -A]``.
+
+    The form of TopoLite's motion search, and this project's own before it
+    read the motion off the stress problem's infeasibility certificate.
+    """
+    m, n = matrix.shape
+    result = scipy.optimize.linprog(-np.asarray(matrix.sum(axis=0)).ravel(), A_ub=sp.vstack([matrix, -matrix]).tocsr(),
+                                    b_ub=np.concatenate([np.ones(m), np.zeros(m)]), bounds=(None, None),
+                                    method="highs-ds")
+    return result.status == 0 and -result.fun > 1e-7
+
+
+def naive_verdict(assembly: Assembly, motion: bool = False) -> tuple[bool, dict]:
+    """(interlocked, seconds per stage of :data:`NAIVE_STAGES`) of the naive baseline on a fresh copy.
+
+    With ``motion``, a missing stress is followed by :func:`naive_motion` (timed with the LP stage), as a
+    verdict that names the moving blocks needs.
+    """
     from interlock.verify import contacts
     from interlock.verify.matrix import interlocking_matrix
 
@@ -212,5 +229,7 @@ def naive_verdict(assembly: Assembly) -> tuple[bool, dict]:
     seconds["rank"] = time.perf_counter() - start
     start = time.perf_counter()
     stress = naive_stress(A.matrix)
+    if motion and not stress:
+        naive_motion(A.matrix)
     seconds["lp"] = time.perf_counter() - start
     return full_rank and stress, seconds

@@ -7,6 +7,13 @@ Two families of assemblies, each with its outer ring fixed (main paper Cor. 4.8)
 - ``escher``: patches of radius r = 2 ... 12 of a p4 Escher block with edges 0
   and 1 deformed (69 to 1,901 blocks).
 
+and the same assemblies with one block fixed (block 0), which do not
+interlock (``rhomblock, one fixed``, ``escher, one fixed``): the failing case
+of every wrong frame and failed design.  ``one_fixed_over_ring`` gives, per
+size, the verdict's median with one block fixed over that with the ring fixed
+(target: at most 2).  Their naive baseline also looks for the motion, by
+HiGHS' simplex on ``[A; -A]`` (:func:`benchmarks.common.naive_motion`).
+
 Each size runs the whole pipeline several times and times every stage on its
 own: ``generation`` (``random_hexagon`` + ``rhomblock_assembly``, or
 ``escher_block`` + ``patch``), ``contacts``, ``matrix``, ``rank`` and ``lp``
@@ -127,12 +134,28 @@ class Family:
     quick_sizes: tuple
 
 
+def rhomblocks_one_fixed(n: int):
+    """:func:`rhomblocks` with block 0 as the only fixed block: not interlocked."""
+    return rhomblocks(n).with_frame([0])
+
+
+def escher_patch_one_fixed(radius: float):
+    """:func:`escher_patch` with block 0 as the only fixed block: not interlocked."""
+    return escher_patch(radius).with_frame([0])
+
+
 FAMILIES = (
     Family("rhomblock", rhomblocks, "n", "RhomBlocks on a random n x n x n hexagon, ring fixed",
            (5, 10, 15, 20, 30, 40), (3, 5, 8)),
     Family("escher", escher_patch, "radius", "patch of a p4 Escher block (edges 0, 1 deformed), ring fixed",
            (2, 3, 4, 6, 9, 12), (1, 2)),
+    Family("rhomblock, one fixed", rhomblocks_one_fixed, "n", "the same RhomBlock hexagons, block 0 fixed",
+           (5, 10, 15, 20, 30, 40), (3, 5, 8)),
+    Family("escher, one fixed", escher_patch_one_fixed, "radius", "the same p4 patches, block 0 fixed",
+           (2, 3, 4, 6, 9, 12), (1, 2)),
 )
+#: Which ring-fixed family each one-fixed family is compared with.
+ONE_FIXED = {"rhomblock, one fixed": "rhomblock", "escher, one fixed": "escher"}
 
 
 def run(quick: bool = False) -> dict:
@@ -158,7 +181,13 @@ def run(quick: bool = False) -> dict:
                                    "rows": families[family.name], "exponents": _exponents(families[family.name])}
                      for family in FAMILIES},
     }
+    payload["one_fixed_over_ring"] = {
+        name: [{"blocks": one["blocks"], "ratio": one["seconds"]["verdict"] / ring["seconds"]["verdict"]}
+               for one, ring in zip(families[name], families[ring_name])]
+        for name, ring_name in ONE_FIXED.items()}
     payload["seconds"] = time.perf_counter() - start
+    for name, ratios in payload["one_fixed_over_ring"].items():
+        print(f"{name} over ring: " + ", ".join(f"{r['blocks']}: {r['ratio']:.2f}" for r in ratios))
     for name, family in payload["families"].items():
         print(f"{name} exponents: " + "; ".join(
             who + " " + ", ".join(f"{k} {v:.2f}" for k, v in family["exponents"][who].items() if v is not None)
@@ -230,7 +259,8 @@ def _time_family(family: Family, sizes, policy: Policy, folder: Path) -> list[di
 
 def _naive(assembly, verdict, ours: dict, policy: Policy) -> dict:
     """The naive baseline's medians on ``assembly``, and our medians over them."""
-    runs = _repeat(lambda: naive_verdict(assembly), policy.runs, policy.naive_budget)
+    motion = verdict.interlocked is False
+    runs = _repeat(lambda: naive_verdict(assembly, motion=motion), policy.runs, policy.naive_budget)
     per_run = [dict(seconds, verdict=sum(seconds.values())) for _, seconds in runs]
     seconds, every = _medians(per_run)
     interlocked = runs[0][0]
@@ -383,11 +413,13 @@ def _chart(payload: dict) -> None:
     if plt is None:
         return
     families = payload["families"]
-    fig, axes = plt.subplots(1, len(families) + 1, figsize=(6 * (len(families) + 1), 5.2))
-    for ax, (name, family) in zip(axes, families.items()):
+    fig, grid = plt.subplots(2, 3, figsize=(18, 10.4))
+    panels = [grid[0, 0], grid[0, 1], grid[1, 0], grid[1, 1]]  # ring fixed on top, one block fixed below
+    for ax, (name, family) in zip(panels, families.items()):
         _time_panel(ax, family)
         ax.set_title(family["description"], fontsize=9)
-    _memory_panel(axes[-1], families)
+    _memory_panel(grid[0, 2], families)
+    grid[1, 2].axis("off")
     save_chart(fig, "scaling")
     plt.close(fig)
 
@@ -416,7 +448,7 @@ def _block_ticks(ax, blocks) -> None:
 
 
 def _memory_panel(ax, families: dict) -> None:
-    for (name, family), marker, style in zip(families.items(), "os^", ("-", ":", "-.")):
+    for (name, family), marker, style in zip(families.items(), "osD^", ("-", ":", "-.", "--")):
         rows = [row for row in family["rows"] if row.get("memory_mb")]
         blocks = [row["blocks"] for row in rows]
         ax.loglog(blocks, [row["memory_mb"]["peak"] for row in rows], marker + style, color="black", ms=4,

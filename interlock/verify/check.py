@@ -18,7 +18,7 @@ from threadpoolctl import threadpool_limits
 from interlock.blocks.assembly import Assembly
 from interlock.errors import InterlockError
 from interlock.verify.contacts import contacts as find_contacts
-from interlock.verify.margin import Margin, assess
+from interlock.verify.margin import Margin, assess, rounding_tolerance
 from interlock.verify.matrix import InterlockingMatrix, interlocking_matrix
 from interlock.verify.validate import validate as check_overlaps
 
@@ -233,7 +233,9 @@ def check(assembly: Assembly, frame=None, translational: bool = False, certify: 
     fixed = tuple(sorted(set(range(len(assembly))) - set(A.free.tolist())))
     tolerances = {"rank_rtol": rank_rtol, "rank_clear_rtol": RANK_CLEAR_RTOL, "lp_tol": lp_tol, "moving_rtol": MOVING_RTOL,
                   "length_scale": A.length_scale}
-    bent = np.array([not c.planar for c in found], dtype=bool)
+    # faces bent by no more than the input's rounding (or the given tolerance) are planar as far as it can tell
+    flat_within = tolerance if tolerance is not None else rounding_tolerance(assembly)[0]
+    bent = np.array([not c.planar and c.deviation > flat_within for c in found], dtype=bool)
     base = dict(frame=fixed, shape=A.shape, translational=translational, contacts=len(found),
                 bent_contacts=int(bent.sum()), tolerances=tolerances, timings=timings)
     if len(A.free) == 0:

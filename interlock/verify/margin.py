@@ -35,7 +35,7 @@ import scipy.optimize
 import scipy.sparse as sp
 import scipy.sparse.linalg
 
-__all__ = ["Margin", "assess", "input_precision", "row_tolerances", "margin_lower_bound", "tolerant_motion",
+__all__ = ["Margin", "assess", "rounding_tolerance", "input_precision", "row_tolerances", "margin_lower_bound", "tolerant_motion",
            "GRID_BITS", "DECIMAL_MIN_RTOL", "DECIMAL_MAX_RTOL", "DECIMAL_FULL_SHARE", "PRECISION_FACTOR",
            "MARGIN_CHUNK", "EXACT_RTOL", "TOLERANT_SHARE", "BEND_FACTOR"]
 
@@ -202,23 +202,32 @@ def _json(value: float):
     return value if math.isfinite(value) else str(value)
 
 
+def rounding_tolerance(assembly) -> tuple[float, str]:
+    """``(t, source)``: :data:`PRECISION_FACTOR` times the :func:`input_precision` of the blocks' coordinates.
+
+    Blocks placed by non-identity transforms (generated assemblies) count as
+    float64: their placement was computed, not read from a file.
+    """
+    if not np.allclose(assembly.transforms, np.eye(4), rtol=0.0, atol=0.0):
+        return PRECISION_FACTOR * assembly.scale * 2.0**-53, "float64 input"
+    delta, source = input_precision(np.vstack([m.vertices for m in assembly.meshes]))
+    return PRECISION_FACTOR * delta, f"{source} input"
+
+
 def assess(matrix, contacts, assembly, stress, tolerance: float | None = None) -> Margin:
     """The margin of an "interlocked" float verdict against the tolerance of its input.
 
-    ``tolerance`` (a length) defaults to :data:`PRECISION_FACTOR` times
-    :func:`input_precision` of the blocks' coordinates (placed by non-identity
-    transforms: computed in float64), or :data:`BEND_FACTOR` times the largest
+    ``tolerance`` (a length) defaults to :func:`rounding_tolerance`, or
+    :data:`BEND_FACTOR` times the largest
     :attr:`~interlock.blocks.contact.Contact.deviation` of a contact from its
-    plane where that is larger (noisy or re-meshed input).  Below :data:`EXACT_RTOL` of the model
-    size nothing is computed (``lower = inf``).  Otherwise the lower bound of
+    plane where that is larger (noisy or re-meshed input).  Below
+    :data:`EXACT_RTOL` of the model size nothing is computed
+    (``lower = inf``).  Otherwise the lower bound of
     :func:`margin_lower_bound` and, when it does not exceed 1, the motion of
     :func:`tolerant_motion`.
     """
     if tolerance is None:
-        identity = np.allclose(assembly.transforms, np.eye(4), rtol=0.0, atol=0.0)
-        vertices = np.vstack([m.vertices for m in assembly.meshes]) if identity else np.zeros((0, 3))
-        delta, source = input_precision(vertices) if identity else (assembly.scale * 2.0**-53, "float64")
-        tolerance, source = PRECISION_FACTOR * delta, f"{source} input"
+        tolerance, source = rounding_tolerance(assembly)
         bent = max((c.deviation for c in contacts), default=0.0)
         if BEND_FACTOR * bent > tolerance:  # the faces are measurably less exact than their rounding
             tolerance, source = BEND_FACTOR * bent, f"faces bent by up to {bent:.2g}"
