@@ -38,6 +38,13 @@ FINITE_STEPS = (1e-4, 1e-3, 1e-2)
 OVERLAP_RTOL = 1e-12
 
 
+#: Up to this many columns an "interlocked" verdict is first certified by verified floating point
+#: (:func:`verified_stress`, dense ``O(n^3)``, about 8 n^2 bytes per matrix).
+VERIFIED_COLUMNS = 6000
+#: Up to this many columns exact rational arithmetic is tried when verified floating point does not decide.
+EXACT_COLUMNS = 2000
+
+
 def certify_verdict(assembly, A: InterlockingMatrix, verdict):
     """The verdict re-checked rigorously: ``certified`` set and the method added to ``status``."""
     if verdict.interlocked is None:
@@ -70,9 +77,16 @@ def _stress_certificate(flint, matrix, w: np.ndarray):
     m, n = matrix.shape
     if m < n:
         return False, "not certified: fewer rows than columns"
-    _, _, pivots = scipy.linalg.qr(matrix.toarray().T, pivoting=True, mode="economic")
-    basis = np.sort(pivots[:n])
+    basis = _qr_rows(matrix)
     rest = np.setdiff1d(np.arange(m), basis)
+    if n <= VERIFIED_COLUMNS:
+        bound = verified_stress(matrix[basis].toarray(), matrix[rest], w[rest])
+        if bound is not None and bound > 0:
+            return True, (f"certified: exact positive self-stress (smallest weight at least {bound:.3g}, "
+                          "by verified floating point) and an invertible row basis")
+    if n > EXACT_COLUMNS:
+        return False, f"not certified: verified floating point did not decide, and {n} columns are too many " \
+                      f"for exact rational arithmetic (at most {EXACT_COLUMNS})"
     B = _fmpq_mat(flint, matrix[basis])
     try:
         if B.rank() < n:
@@ -86,6 +100,53 @@ def _stress_certificate(flint, matrix, w: np.ndarray):
         return False, "not certified: the exact stress is not positive on every row"
     return True, (f"certified: exact positive self-stress (smallest weight {float(smallest):.3g}) "
                   "and an exactly invertible row basis")
+
+
+def _qr_rows(matrix) -> np.ndarray:
+    """``n`` rows of an ``m x n`` matrix chosen by QR with column pivoting of its transpose (well conditioned)."""
+    _, _, pivots = scipy.linalg.qr(matrix.toarray().T, pivoting=True, mode="economic")
+    return np.sort(pivots[: matrix.shape[1]])
+
+
+def verified_stress(basis: np.ndarray, rest, w_rest: np.ndarray) -> float | None:
+    """A proved lower bound on the smallest weight of the exact stress ``w_b`` on a row basis, or None.
+
+    The matrix's entries and the weights ``w_rest`` of the other rows are
+    floats, hence exact rationals; ``w_b`` is the exact solution of
+    ``B^T w_b = c`` with ``c = -R^T w_rest``, so that ``A^T w = 0`` exactly.
+    With ``X`` a float inverse of ``B^T`` and every rounding bounded by the
+    standard ``gamma_k = k u / (1 - k u)`` (Higham, Thm. 3.5; ``u = 2^-53``):
+    if ``alpha = || |I - X B^T| + gamma (|X| |B^T|) ||_inf < 1``, then ``B^T``
+    is invertible and ``||w_b - w~||_inf <= || |X| rho ||_inf / (1 - alpha)``
+    for a bound ``rho`` on the residual ``c - B^T w~`` of the float solution
+    ``w~`` (Rump's verification).  The bound returned is ``min w~`` minus
+    that: positive means an exact positive self-stress exists and ``A`` has
+    full column rank.  ``O(n^3)`` in floating point.
+    """
+    n = basis.shape[0]
+    if np.any(w_rest <= 0):
+        return None
+    u = 2.0**-53
+    gamma = lambda k: k * u / (1.0 - k * u)  # noqa: E731
+    Bt = basis.T
+    absolute = abs(rest).T  # (n, m - n), exact
+    per_column = int(np.diff(rest.tocsc().indptr).max(initial=0)) + 1
+    c = -(rest.T @ w_rest)
+    c_error = gamma(per_column) * (absolute @ np.abs(w_rest)) * (1 + gamma(per_column + 2))
+    try:
+        X = np.linalg.inv(Bt)
+    except np.linalg.LinAlgError:
+        return None
+    w = X @ c
+    abs_X, abs_Bt = np.abs(X), np.abs(Bt)
+    products = abs_X @ abs_Bt
+    E = np.abs(np.eye(n) - X @ Bt) * (1 + 2 * u) + gamma(n + 2) * products * (1 + gamma(n + 2))
+    alpha = float(E.sum(axis=1).max()) * (1 + gamma(n + 2))
+    if not alpha < 1:
+        return None
+    residual = np.abs(c - Bt @ w) * (1 + 2 * u) + gamma(n + 2) * (abs_Bt @ np.abs(w)) * (1 + gamma(n + 2)) + c_error
+    spread = float((abs_X @ residual).max()) * (1 + gamma(n + 2)) / (1 - alpha)
+    return float(w.min()) - spread
 
 
 def _rref(M):
