@@ -77,13 +77,17 @@ def _stress_certificate(flint, matrix, w: np.ndarray):
     m, n = matrix.shape
     if m < n:
         return False, "not certified: fewer rows than columns"
+    if n <= VERIFIED_COLUMNS:
+        # rows by LU with partial pivoting first (ten times cheaper than QR with pivoting), then by QR
+        for choose in (_lu_rows, _qr_rows):
+            basis = choose(matrix)
+            rest = np.setdiff1d(np.arange(m), basis)
+            bound = verified_stress(matrix[basis].toarray(), matrix[rest], w[rest])
+            if bound is not None and bound > 0:
+                return True, (f"certified: exact positive self-stress (smallest weight at least {bound:.3g}, "
+                              "by verified floating point) and an invertible row basis")
     basis = _qr_rows(matrix)
     rest = np.setdiff1d(np.arange(m), basis)
-    if n <= VERIFIED_COLUMNS:
-        bound = verified_stress(matrix[basis].toarray(), matrix[rest], w[rest])
-        if bound is not None and bound > 0:
-            return True, (f"certified: exact positive self-stress (smallest weight at least {bound:.3g}, "
-                          "by verified floating point) and an invertible row basis")
     if n > EXACT_COLUMNS:
         return False, f"not certified: verified floating point did not decide, and {n} columns are too many " \
                       f"for exact rational arithmetic (at most {EXACT_COLUMNS})"
@@ -100,6 +104,12 @@ def _stress_certificate(flint, matrix, w: np.ndarray):
         return False, "not certified: the exact stress is not positive on every row"
     return True, (f"certified: exact positive self-stress (smallest weight {float(smallest):.3g}) "
                   "and an exactly invertible row basis")
+
+
+def _lu_rows(matrix) -> np.ndarray:
+    """``n`` rows of an ``m x n`` matrix chosen by LU with partial pivoting (``A = L[p] U``: the pivot rows)."""
+    p = scipy.linalg.lu(matrix.toarray(), p_indices=True)[0]
+    return np.sort(np.argsort(p)[: matrix.shape[1]])
 
 
 def _qr_rows(matrix) -> np.ndarray:
