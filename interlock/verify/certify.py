@@ -77,6 +77,7 @@ def _stress_certificate(flint, matrix, w: np.ndarray):
     m, n = matrix.shape
     if m < n:
         return False, "not certified: fewer rows than columns"
+    basis = None
     if n <= VERIFIED_COLUMNS:
         # rows by LU with partial pivoting first (ten times cheaper than QR with pivoting), then by QR
         for choose in (_lu_rows, _qr_rows):
@@ -86,11 +87,14 @@ def _stress_certificate(flint, matrix, w: np.ndarray):
             if bound is not None and bound > 0:
                 return True, (f"certified: exact positive self-stress (smallest weight at least {bound:.3g}, "
                               "by verified floating point) and an invertible row basis")
-    basis = _qr_rows(matrix)
-    rest = np.setdiff1d(np.arange(m), basis)
     if n > EXACT_COLUMNS:
-        return False, f"not certified: verified floating point did not decide, and {n} columns are too many " \
-                      f"for exact rational arithmetic (at most {EXACT_COLUMNS})"
+        tried = "verified floating point did not decide" if basis is not None else \
+            f"too many for verified floating point (at most {VERIFIED_COLUMNS})"
+        return False, f"not certified: {n} columns, {tried}, and too many for exact rational arithmetic " \
+                      f"(at most {EXACT_COLUMNS})"
+    if basis is None:  # the QR rows of the loop above, else chosen now
+        basis = _qr_rows(matrix)
+        rest = np.setdiff1d(np.arange(m), basis)
     B = _fmpq_mat(flint, matrix[basis])
     try:
         if B.rank() < n:

@@ -98,11 +98,6 @@ class Verdict:
     finite_motion: object = None  # FiniteMotion (order 2), the last one tried
     margin: Margin | None = None  # how far an "interlocked" answer holds beyond the exact input
 
-    @property
-    def robust(self) -> bool:
-        """True when the input's tolerance is negligible (no margin needed) or the margin exceeds 1."""
-        return self.margin is None or self.margin.lower > 1.0
-
     def __str__(self) -> str:
         word = {True: "interlocked", False: "not infinitesimally interlocked", None: "inconclusive"}[self.interlocked]
         if self.interlocked is False and self.motion_kind == "within tolerance":
@@ -182,7 +177,7 @@ def check(assembly: Assembly, frame=None, translational: bool = False, certify: 
         How far (a length, model units) the blocks' faces may be from the
         input's: an "interlocked" answer must hold for every assembly within
         it (docs/interlocking.md, "Margin and tolerance").  Default: what the
-        coordinates' rounding implies (:func:`~interlock.verify.margin.assess`;
+        coordinates' rounding implies (:func:`~interlock.verify.margin.rounding_tolerance`;
         float32 files: about 2e-7 of the largest coordinate).  Where some
         motion keeps every contact within it, the answer is False ("not
         interlocked within tolerance", with the motion); where neither is
@@ -233,9 +228,12 @@ def check(assembly: Assembly, frame=None, translational: bool = False, certify: 
     fixed = tuple(sorted(set(range(len(assembly))) - set(A.free.tolist())))
     tolerances = {"rank_rtol": rank_rtol, "rank_clear_rtol": RANK_CLEAR_RTOL, "lp_tol": lp_tol, "moving_rtol": MOVING_RTOL,
                   "length_scale": A.length_scale}
-    # faces bent by no more than the input's rounding (or the given tolerance) are planar as far as it can tell
-    flat_within = tolerance if tolerance is not None else rounding_tolerance(assembly)[0]
-    bent = np.array([not c.planar and c.deviation > flat_within for c in found], dtype=bool)
+    # the input's tolerance: given, or read off its coordinates, but only where something needs it
+    limit = None if tolerance is None else (float(tolerance), "given")
+    bent = np.array([not c.planar for c in found], dtype=bool)
+    if bent.any():  # faces bent by no more than the tolerance are planar as far as the input can tell
+        limit = limit or rounding_tolerance(assembly)
+        bent &= np.array([c.deviation > limit[0] for c in found], dtype=bool)
     base = dict(frame=fixed, shape=A.shape, translational=translational, contacts=len(found),
                 bent_contacts=int(bent.sum()), tolerances=tolerances, timings=timings)
     if len(A.free) == 0:
@@ -282,7 +280,8 @@ def check(assembly: Assembly, frame=None, translational: bool = False, certify: 
                           stress=stress, **base)
     if verdict.interlocked is True:
         with _stage(timings, "margin", progress):
-            verdict = _with_margin(verdict, assess(A, found, assembly, stress, tolerance), A, len(assembly))
+            limit = limit or rounding_tolerance(assembly)
+            verdict = _with_margin(verdict, assess(A, found, assembly.scale, stress, *limit), A, len(assembly))
     if certify:
         from interlock.verify.certify import certify_verdict
 

@@ -183,7 +183,6 @@ def tolerant_motion(A: sp.csr_matrix, eps: np.ndarray, tol: float = 1e-9):
     (at most 1 when ``x`` reaches the box: a unit motion that keeps every
     contact within its tolerance), or ``(None, inf)`` when the LP fails.
     """
-    m, n = A.shape
     objective = -np.asarray(A.sum(axis=0)).ravel()
     # rows relaxed by a little less than eps, so that HiGHS' feasibility tolerance cannot push a row past it
     result = scipy.optimize.linprog(objective, A_ub=-A, b_ub=TOLERANT_SHARE * eps, bounds=(-1.0, 1.0), method="highs",
@@ -214,26 +213,23 @@ def rounding_tolerance(assembly) -> tuple[float, str]:
     return PRECISION_FACTOR * delta, f"{source} input"
 
 
-def assess(matrix, contacts, assembly, stress, tolerance: float | None = None) -> Margin:
-    """The margin of an "interlocked" float verdict against the tolerance of its input.
+def assess(matrix, contacts, scale: float, stress, tolerance: float, source: str) -> Margin:
+    """The margin of an "interlocked" float verdict against the tolerance ``tolerance`` of its input.
 
-    ``tolerance`` (a length) defaults to :func:`rounding_tolerance`, or
-    :data:`BEND_FACTOR` times the largest
-    :attr:`~interlock.blocks.contact.Contact.deviation` of a contact from its
-    plane where that is larger (noisy or re-meshed input).  Below
-    :data:`EXACT_RTOL` of the model size nothing is computed
+    ``tolerance`` (a length) and its ``source`` are the caller's: the given
+    one, or :func:`rounding_tolerance`; then :data:`BEND_FACTOR` times the
+    largest :attr:`~interlock.blocks.contact.Contact.deviation` of a contact
+    from its plane is used where that is larger (noisy or re-meshed input).
+    Below :data:`EXACT_RTOL` of the model size ``scale`` nothing is computed
     (``lower = inf``).  Otherwise the lower bound of
     :func:`margin_lower_bound` and, when it does not exceed 1, the motion of
     :func:`tolerant_motion`.
     """
-    if tolerance is None:
-        tolerance, source = rounding_tolerance(assembly)
+    if source != "given":
         bent = max((c.deviation for c in contacts), default=0.0)
         if BEND_FACTOR * bent > tolerance:  # the faces are measurably less exact than their rounding
             tolerance, source = BEND_FACTOR * bent, f"faces bent by up to {bent:.2g}"
-    else:
-        source = "given"
-    if tolerance <= EXACT_RTOL * assembly.scale or stress is None:
+    if tolerance <= EXACT_RTOL * scale or stress is None:
         return Margin(math.inf, math.inf, float(tolerance), source)
     eps = row_tolerances(matrix, contacts, tolerance)
     lower = margin_lower_bound(matrix.matrix, eps, stress)

@@ -37,3 +37,11 @@ def test_the_bound_is_close_to_the_exact_smallest_weight():
     assert 1 - 1e-12 < bound <= 1
     A = interlocking_matrix(presets.interlocking_cubes()).matrix
     assert A.shape[1] <= module.VERIFIED_COLUMNS
+
+
+def test_beyond_both_limits_the_verdict_says_it_is_not_certified_and_why(monkeypatch):
+    monkeypatch.setattr(module, "VERIFIED_COLUMNS", 0)
+    monkeypatch.setattr(module, "EXACT_COLUMNS", 0)
+    v = check(presets.interlocking_cubes(), certify=True)
+    assert v.interlocked is True and not v.certified
+    assert "too many for verified floating point (at most 0)" in v.status
