@@ -217,6 +217,10 @@ def check(assembly: Assembly, frame=None, translational: bool = False, certify: 
         raise InterlockError("the assembly has no blocks; there is nothing to check")
     if order not in (1, 2):
         raise InterlockError(f"order must be 1 (first order) or 2 (second order and finite motions), got {order!r}")
+    if tolerance is not None and (isinstance(tolerance, bool) or not isinstance(tolerance, (int, float, np.floating))
+                                  or not math.isfinite(tolerance) or tolerance < 0):
+        raise InterlockError(f"tolerance must be a finite length >= 0 in model units (or None: read off the input's "
+                             f"rounding), got {tolerance!r}")
     timings = {}
     if validate:
         with _stage(timings, "validate", progress):
@@ -359,7 +363,9 @@ def _with_margin(verdict: Verdict, margin: Margin, A: InterlockingMatrix, blocks
                                                                       "tolerance": margin.tolerance,
                                                                       "tolerance_from": margin.source})
     if margin.lower > 1.0:
-        return verdict if math.isinf(margin.lower) else dataclasses.replace(verdict, status=f"{verdict.status}; {margin}")
+        if math.isinf(margin.lower):  # the tolerance is negligible: nothing to state
+            return verdict
+        return dataclasses.replace(verdict, status=f"{verdict.status}; {margin}")
     if margin.motion is not None and margin.upper <= 1.0:
         motion, moving = _motion(A, margin.motion, blocks, reversible=False)
         return dataclasses.replace(

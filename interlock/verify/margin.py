@@ -35,7 +35,8 @@ import scipy.optimize
 import scipy.sparse as sp
 import scipy.sparse.linalg
 
-__all__ = ["Margin", "assess", "rounding_tolerance", "input_precision", "row_tolerances", "margin_lower_bound", "tolerant_motion",
+__all__ = ["Margin", "assess", "rounding_tolerance", "input_precision", "row_tolerances", "margin_lower_bound",
+           "tolerant_motion",
            "GRID_BITS", "DECIMAL_MIN_RTOL", "DECIMAL_MAX_RTOL", "DECIMAL_FULL_SHARE", "PRECISION_FACTOR",
            "MARGIN_CHUNK", "EXACT_RTOL", "TOLERANT_SHARE", "BEND_FACTOR"]
 

@@ -125,3 +125,12 @@ def test_verdicts_identical_from_1e_minus_9_to_1e12(factor):
         assert (scaled.interlocked, scaled.contacts, scaled.rank, scaled.moving) == \
             (reference.interlocked, reference.contacts, reference.rank, reference.moving)
     assert reference.interlocked is True and reference.contacts == 16
+
+
+@pytest.mark.parametrize("bad", [-1e-6, float("nan"), float("inf"), "1e-6", True])
+def test_a_bad_tolerance_is_a_clear_error(bad):
+    from interlock import InterlockError
+    from interlock.blocks import presets
+
+    with pytest.raises(InterlockError, match="tolerance must be a finite length >= 0"):
+        check(presets.cube_grid(), tolerance=bad)
