@@ -1,0 +1,498 @@
+"""Rhino ``.3dm`` files through rhino3dm: one mesh object per block, layers by class, a ``frame`` layer."""
+
+from __future__ import annotations
+
+import ast
+import json
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+import trimesh
+
+from interlock.blocks.assembly import Assembly
+from interlock.blocks.lozenge import Lozenge
+from interlock.blocks.repair import merge_vertices, split_t_junctions, triangulate_polygons, unmatched_edges
+from interlock.errors import AssemblyError
+from interlock.wallpaper.elements import GroupElement, parse_symop
+
+__all__ = ["write_3dm", "read_3dm", "RhinoError", "FRAME_LAYER", "MARKER_KEY", "INFO_KEY", "MISSING_MESSAGE",
+           "RHINO_VERSION", "LAYER_COLOURS"]
+
+#: The layer whose objects are the fixed blocks (the frame), on writing and on reading (any case).
+FRAME_LAYER = "frame"
+#: Document user text key announcing an interlock file: ``"interlock blocks=N fixed=K classes=KIND"``.
+MARKER_KEY = "interlock"
+#: Document user text key of ``Assembly.info``, written as a Python literal (``repr``) so that
+#: integer keys, tuples and floats read back exactly.
+INFO_KEY = "interlock.info"
+#: The Rhino version of written files: 7, which Rhino 7 and 8 open (double-precision mesh
+#: vertices are kept in both).
+RHINO_VERSION = 7
+#: The error when rhino3dm does not import.
+MISSING_MESSAGE = 'reading and writing .3dm files needs rhino3dm: pip install "interlock[rhino]"'
+#: Layer colours (RGBA) of classes 0, 1, 2, ... (cycled): the gallery's Okabe-Ito palette.
+LAYER_COLOURS = ((0, 114, 178, 255), (230, 159, 0, 255), (0, 158, 115, 255), (204, 121, 167, 255),
+                 (86, 180, 233, 255), (213, 94, 0, 255), (240, 228, 66, 255), (120, 120, 120, 255))
+_FRAME_COLOUR = (40, 40, 40, 255)
+_IDENTITY = ((1, 0), (0, 1))
+
+
+class RhinoError(AssemblyError):
+    """A ``.3dm`` file that cannot be read as blocks or written, or rhino3dm missing."""
+
+
+def write_3dm(assembly: Assembly, path, *, classes=None, version: int = RHINO_VERSION) -> Path:
+    """Write an assembly to a Rhino ``.3dm`` file, one closed mesh object per block.
+
+    - Objects are named ``block_0007 <label>`` (block index, then the label: a group
+      element such as ``-y+1/2,x``, a lozenge ``D(0, 0)+U(1, 0)``, ...).
+    - Each class (coset of the translation subgroup for Escher blocks, orientation
+      for RhomBlocks, else the mesh type) is a layer (``coset 0``, ``orientation 2``);
+      the fixed blocks are on the layer :data:`FRAME_LAYER` instead.
+    - Object user strings: ``block``, ``label``, ``label_type``, ``class``,
+      ``class_kind``, ``fixed``, ``mirrored``, ``type`` (mesh index), ``transform``
+      (16 numbers, row by row), ``volume``; for group elements also ``element`` and
+      ``coset`` (the linear part, e.g. ``-y,x``), for lozenges ``orientation``.
+    - Document user text: :data:`MARKER_KEY`, :data:`INFO_KEY` and each key of
+      ``assembly.info`` (``group``, ``deformation``, ``seed``, ...) as JSON.
+
+    Vertices are double precision, so :func:`read_3dm` gives back every block's
+    world vertices bit for bit.  The file is written next to ``path`` under a
+    temporary name and then moved into place, so a reader never sees half a file.
+
+    Parameters
+    ----------
+    assembly : Assembly
+    path : str or path-like
+        The file to write (any suffix; ``.3dm`` by convention).
+    classes : (array of int, str), optional
+        Each block's class and what classes mean, e.g. the result of
+        ``interlock.gallery.appearance.block_classes``; by default the same rules
+        are applied here.
+    version : int
+        The Rhino file version (6, 7 or 8); :data:`RHINO_VERSION` by default.
+
+    Returns
+    -------
+    pathlib.Path
+
+    Raises
+    ------
+    RhinoError
+        If rhino3dm is missing (:data:`MISSING_MESSAGE`), the assembly has no blocks,
+        ``classes`` does not give one class per block, or the file cannot be written.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from interlock.blocks import presets
+    >>> grid = presets.cube_grid()
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     back = read_3dm(write_3dm(grid, Path(folder) / "grid.3dm"))
+    >>> len(back), back.frame == grid.frame, back.info["preset"], back.labels[:3]
+    (9, True, 'cube_grid', ((0, 0), (0, 1), (0, 2)))
+    """
+    rhino = _rhino3dm()
+    path = Path(path)
+    if not isinstance(assembly, Assembly):
+        raise RhinoError(f"write_3dm needs an Assembly, got {type(assembly).__name__}")
+    if not len(assembly):
+        raise RhinoError(f"nothing to write to {path.name}: the assembly has no blocks")
+    values, kind = block_classes(assembly) if classes is None else classes
+    values = np.asarray(values, dtype=int).reshape(-1)
+    if len(values) != len(assembly):
+        raise RhinoError(f"classes must give one class per block: got {len(values)} for {len(assembly)} blocks")
+    document = rhino.File3dm()
+    layers = {}
+    for value in sorted(set(values.tolist())):
+        layers[value] = _add_layer(rhino, document, f"{kind} {value}", LAYER_COLOURS[value % len(LAYER_COLOURS)])
+    fixed = set(assembly.frame)
+    if fixed:
+        layers["frame"] = _add_layer(rhino, document, FRAME_LAYER, _FRAME_COLOUR)
+    for i in range(len(assembly)):
+        world = assembly.mesh(i)
+        mesh = rhino.Mesh()
+        for x, y, z in world.vertices.tolist():
+            mesh.Vertices.AddPoint3d(x, y, z)  # double precision
+        for a, b, c in world.faces.tolist():
+            mesh.Faces.AddFace(a, b, c)
+        mesh.Normals.ComputeNormals()
+        attributes = rhino.ObjectAttributes()
+        attributes.Name = f"block_{i:04d} {assembly.labels[i]}"
+        attributes.LayerIndex = layers["frame" if i in fixed else int(values[i])]
+        for key, value in _block_strings(assembly, i, int(values[i]), kind, world).items():
+            attributes.SetUserString(key, value)
+        document.Objects.AddMesh(mesh, attributes)
+    document.Strings[MARKER_KEY] = f"interlock blocks={len(assembly)} fixed={len(fixed)} classes={kind}"
+    info = _plain(assembly.info)
+    document.Strings[INFO_KEY] = repr(info)
+    for key, value in info.items():
+        if isinstance(key, str) and key not in (MARKER_KEY, INFO_KEY):
+            document.Strings[key] = value if isinstance(value, str) else json.dumps(value, default=str)
+    _write_atomically(document, path, version)
+    return path
+
+
+def read_3dm(path, frame=None, *, frame_layer: str = FRAME_LAYER) -> Assembly:
+    """An assembly from a Rhino ``.3dm`` file: every closed mesh or closed polysurface is a block.
+
+    A file of :func:`write_3dm` comes back exactly: the blocks in their order
+    with bit-identical vertices, their labels (group elements, lozenges, ...),
+    the frame and ``info``.  A file drawn by a person gives one block per
+    object, in file order, labelled by the object's name (else its id); the
+    objects on the layer ``frame_layer`` (or a sublayer of it; any case) are
+    the frame.
+
+    Objects may be meshes (vertices welded where they coincide), or
+    polysurfaces and extrusions: those Rhino saved with render meshes are read
+    through them; others with planar faces and straight edges (boxes, prisms,
+    anything faceted) are cut into polygons here.  rhino3dm cannot mesh curved
+    surfaces outside Rhino, so a curved polysurface saved without render
+    meshes is an error saying so.
+
+    Parameters
+    ----------
+    path : str or path-like
+    frame : iterable of int, optional
+        Indices of the fixed blocks, instead of the frame layer.
+    frame_layer : str
+        The name of the layer of fixed blocks.
+
+    Returns
+    -------
+    Assembly
+        ``info`` holds the written ``info`` (for files of :func:`write_3dm`),
+        ``source``, ``format`` (``"3dm"``) and ``frame_from`` (``"argument"``,
+        ``"file"`` or ``"none"``).
+
+    Raises
+    ------
+    RhinoError
+        (one line) if rhino3dm is missing, the file is missing, empty or not a
+        ``.3dm`` file, holds no objects, or an object is not a closed solid (an
+        open mesh, a curve, a point, text, ...; the message names the object).
+
+    Examples
+    --------
+    Two boxes drawn as a person would, the lower one on the ``frame`` layer:
+
+    >>> import rhino3dm, tempfile
+    >>> model = rhino3dm.File3dm()
+    >>> def box(z, layer_name):
+    ...     layer, attributes = rhino3dm.Layer(), rhino3dm.ObjectAttributes()
+    ...     layer.Name = layer_name
+    ...     attributes.LayerIndex = model.Layers.Add(layer)
+    ...     corners = rhino3dm.BoundingBox(0, 0, z, 1, 1, z + 1)
+    ...     return model.Objects.AddBrep(rhino3dm.Brep.CreateFromBox(rhino3dm.Box(corners)), attributes)
+    >>> _, _ = box(0, "frame"), box(1, "blocks")
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     _ = model.Write(str(Path(folder) / "stack.3dm"), 7)
+    ...     stack = read_3dm(Path(folder) / "stack.3dm")
+    >>> len(stack), stack.frame, stack.volumes.tolist(), stack.info["frame_from"]
+    (2, (0,), [1.0, 1.0], 'file')
+    """
+    rhino = _rhino3dm()
+    path = Path(path)
+    document = _read_document(rhino, path)
+    marker = _string(document, MARKER_KEY)
+    ours = marker.startswith("interlock ")
+    objects = [document.Objects[k] for k in range(len(document.Objects))]
+    if not objects:
+        raise RhinoError(f"{path.name} holds no objects; a block is a closed mesh or a closed polysurface")
+    on_frame = _frame_layers(document, frame_layer)
+    blocks = []  # (order key, mesh, label, fixed)
+    for k, item in enumerate(objects):
+        name = _object_name(document, item, k)
+        mesh = _object_mesh(rhino, item.Geometry, name, path)
+        strings = dict(item.Attributes.GetUserStrings())
+        fixed = item.Attributes.LayerIndex in on_frame
+        if ours and "block" in strings:
+            blocks.append((int(strings["block"]), mesh, _label(strings), fixed))
+        else:
+            label = item.Attributes.Name or str(item.Attributes.Id)
+            blocks.append((k, mesh, f"{path.name}:{label}", fixed))
+    blocks.sort(key=lambda block: block[0])
+    expected = _marker_count(marker)
+    if ours and expected is not None and expected != len(blocks):
+        raise RhinoError(f"{path.name} announces {expected} blocks but holds {len(blocks)}; the file is cut short "
+                         "or objects were deleted")
+    stored = [k for k, block in enumerate(blocks) if block[3]]
+    info = _info(_string(document, INFO_KEY)) if ours else {}
+    frame_from = "argument" if frame is not None else "file" if (on_frame or ours) else "none"
+    info.update({"source": [str(path)], "format": "3dm", "frame_from": frame_from})
+    return Assembly.from_meshes([b[1] for b in blocks], frame=stored if frame is None else frame,
+                                labels=[b[2] for b in blocks], info=info)
+
+
+def block_classes(assembly: Assembly) -> tuple[np.ndarray, str]:
+    """One small integer per block, and what it means (the layers of :func:`write_3dm`).
+
+    The rules of ``interlock.gallery.appearance.block_classes``: lozenge
+    orientation (``"orientation"``) for RhomBlocks, the coset of the translation
+    subgroup (``"coset"``, the identity's first) for Escher blocks, the cell's
+    block (by the same rules where they apply) for patches of a periodic cell,
+    else the mesh type (``"type"``).
+
+    >>> from interlock.blocks import presets
+    >>> classes, kind = block_classes(presets.cube_grid())
+    >>> kind, sorted(set(classes.tolist()))
+    ('type', [0])
+    """
+    return _classes(assembly.labels, assembly.types, assembly.info)
+
+
+# --- writing ---------------------------------------------------------------------------------------
+
+def _rhino3dm():
+    try:
+        import rhino3dm
+    except ImportError:
+        raise RhinoError(MISSING_MESSAGE) from None
+    return rhino3dm
+
+
+def _add_layer(rhino, document, name: str, colour) -> int:
+    layer = rhino.Layer()
+    layer.Name = name
+    layer.Color = tuple(int(c) for c in colour)
+    return document.Layers.Add(layer)
+
+
+def _block_strings(assembly: Assembly, i: int, value: int, kind: str, world: trimesh.Trimesh) -> dict[str, str]:
+    label = assembly.labels[i]
+    label_type, text = _label_text(label)
+    strings = {"block": str(i), "label": text, "label_type": label_type, "class": str(value), "class_kind": kind,
+               "fixed": str(i in assembly.frame).lower(), "mirrored": str(bool(assembly.mirrored[i])).lower(),
+               "type": str(int(assembly.types[i])),
+               "transform": ",".join(repr(v) for v in assembly.transforms[i].ravel().tolist()),
+               "volume": repr(float(world.volume))}
+    if isinstance(label, GroupElement):
+        strings["element"] = str(label)
+        strings["coset"] = str(GroupElement(label.linear, (0, 0)))
+    elif isinstance(label, Lozenge):
+        strings["orientation"] = str(label.orientation)
+    return strings
+
+
+def _label_text(label) -> tuple[str, str]:
+    """How a label is stored: its kind and a text it can be rebuilt from."""
+    if isinstance(label, GroupElement):
+        return "element", str(label)
+    if isinstance(label, Lozenge):
+        return "lozenge", f"{label.i},{label.j},{label.orientation}"
+    if isinstance(label, tuple) and all(isinstance(v, (int, np.integer)) for v in label):
+        return "integers", ",".join(str(int(v)) for v in label)
+    if isinstance(label, (int, np.integer)) and not isinstance(label, (bool, np.bool_)):
+        return "int", str(int(label))
+    if isinstance(label, str):
+        return "str", label
+    return "text", str(label)
+
+
+def _plain(value):
+    """``value`` with numpy arrays and scalars as Python lists and numbers, and other objects as text."""
+    if isinstance(value, dict):
+        return {(_plain(k) if isinstance(k, (np.integer, np.floating)) else k): _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return type(value)(_plain(v) for v in value)
+    if isinstance(value, np.ndarray):
+        return _plain(value.tolist())
+    if isinstance(value, np.generic):
+        return value.item()
+    if value is None or isinstance(value, (bool, int, float, str)):
+        return value
+    return str(value)
+
+
+def _write_atomically(document, path: Path, version: int):
+    folder = path.parent if str(path.parent) else Path(".")
+    if not folder.is_dir():
+        raise RhinoError(f"cannot write {path}: the folder {folder} does not exist")
+    try:
+        handle, temporary = tempfile.mkstemp(dir=folder, prefix=f".{path.stem}-", suffix=".3dm")
+    except OSError as error:
+        raise RhinoError(f"cannot write {path}: {error.strerror or error}") from None
+    os.close(handle)
+    try:
+        if not document.Write(temporary, int(version)):
+            raise RhinoError(f"cannot write {path}: rhino3dm failed to write a version {version} file "
+                             "(versions 6, 7 and 8 are supported)")
+        os.replace(temporary, path)
+    except OSError as error:
+        raise RhinoError(f"cannot write {path}: {error.strerror or error}") from None
+    finally:
+        if os.path.exists(temporary):
+            os.unlink(temporary)
+
+
+# --- reading ---------------------------------------------------------------------------------------
+
+def _read_document(rhino, path: Path):
+    if not path.is_file():
+        raise RhinoError(f"3dm file {path} does not exist")
+    if path.stat().st_size == 0:
+        raise RhinoError(f"{path.name} is empty, not a Rhino .3dm file")
+    document = rhino.File3dm.Read(str(path))
+    if document is None:
+        raise RhinoError(f"{path.name} is not a Rhino .3dm file that rhino3dm can read")
+    return document
+
+
+def _string(document, key: str) -> str:
+    try:
+        return document.Strings[key] or ""
+    except (KeyError, IndexError, TypeError):
+        return ""
+
+
+def _marker_count(marker: str) -> int | None:
+    for word in marker.split():
+        if word.startswith("blocks="):
+            try:
+                return int(word[len("blocks="):])
+            except ValueError:
+                return None
+    return None
+
+
+def _info(text: str) -> dict:
+    try:
+        info = ast.literal_eval(text) if text else {}
+    except (ValueError, SyntaxError, MemoryError, RecursionError):
+        return {"info_text": text}
+    return info if isinstance(info, dict) else {"info_text": text}
+
+
+def _frame_layers(document, frame_layer: str) -> set[int]:
+    """Indices of the layers named ``frame_layer`` and of their sublayers (any case)."""
+    wanted = frame_layer.casefold()
+    layers = [document.Layers[k] for k in range(len(document.Layers))]
+    return {k for k, layer in enumerate(layers)
+            if any(part.casefold() == wanted for part in (layer.FullPath or layer.Name or "").split("::"))}
+
+
+def _object_name(document, item, k: int) -> str:
+    attributes = item.Attributes
+    layer = attributes.LayerIndex
+    layer_name = document.Layers[layer].FullPath if 0 <= layer < len(document.Layers) else "?"
+    name = f" {attributes.Name!r}" if attributes.Name else ""
+    return f"object {k}{name} (id {attributes.Id}, layer {layer_name!r})"
+
+
+def _object_mesh(rhino, geometry, name: str, path: Path) -> trimesh.Trimesh:
+    """The object as a closed triangle mesh, or a one-line error naming it."""
+    what = type(geometry).__name__
+    if isinstance(geometry, rhino.Mesh):
+        vertices, faces = _mesh_arrays(geometry)
+    elif isinstance(geometry, rhino.Extrusion):
+        cached = geometry.GetMesh(rhino.MeshType.Any)
+        if cached is not None:
+            vertices, faces = _mesh_arrays(cached)
+        else:
+            brep = geometry.ToBrep(True)
+            if brep is None:
+                raise RhinoError(f"{name} of {path.name}: an extrusion rhino3dm cannot turn into a polysurface")
+            vertices, faces = _brep_arrays(rhino, brep, name, path)
+    elif isinstance(geometry, rhino.Brep):
+        vertices, faces = _brep_arrays(rhino, geometry, name, path)
+    else:
+        raise RhinoError(f"{name} of {path.name} is a {what}, not a closed solid; a block is a closed mesh or a "
+                         "closed polysurface (delete the object or move it to another file)")
+    if not len(faces):
+        raise RhinoError(f"{name} of {path.name} is a {what} without faces, not a closed solid")
+    vertices, faces = _closed_faces(vertices, faces, f"{name} of {path.name}", what)
+    return trimesh.Trimesh(vertices, faces, process=False)
+
+
+def _mesh_arrays(mesh) -> tuple[np.ndarray, np.ndarray]:
+    vertices = np.array([(p.X, p.Y, p.Z) for p in mesh.Vertices.ToPoint3dArray()], dtype=float).reshape(-1, 3)
+    corners = np.array([mesh.Faces[k] for k in range(len(mesh.Faces))], dtype=np.int64).reshape(-1, 4)
+    triangles = corners[corners[:, 2] == corners[:, 3], :3]
+    quads = corners[corners[:, 2] != corners[:, 3]]
+    if len(quads):
+        cut, _ = triangulate_polygons(vertices, quads.ravel(), np.full(len(quads), 4))
+        triangles = np.vstack([triangles, cut])
+    return vertices, triangles
+
+
+def _brep_arrays(rhino, brep, name: str, path: Path) -> tuple[np.ndarray, np.ndarray]:
+    """Triangles of a polysurface: from its render meshes if saved, else from planar faces with straight edges."""
+    where = f"{name} of {path.name}"
+    faces = [brep.Faces[k] for k in range(len(brep.Faces))]
+    if not brep.IsSolid:
+        raise RhinoError(f"{where} is an open polysurface, not a closed solid; close it (Cap, Join) in Rhino")
+    cached = [face.GetMesh(rhino.MeshType.Any) for face in faces]
+    if all(mesh is not None for mesh in cached):
+        parts = [_mesh_arrays(mesh) for mesh in cached]
+        offsets = np.cumsum([0] + [len(v) for v, _ in parts])
+        return (np.vstack([v for v, _ in parts]), np.vstack([f + o for (_, f), o in zip(parts, offsets)]))
+    edges = [brep.Edges[k] for k in range(len(brep.Edges))]
+    if not all(face.IsPlanar() for face in faces) or not all(edge.IsLinear() for edge in edges):
+        raise RhinoError(f"{where} is a polysurface with curved faces or edges and no render mesh; rhino3dm cannot "
+                         "mesh it outside Rhino: mesh it in Rhino (_Mesh) or save the file with render meshes")
+    vertices = np.array([(p.X, p.Y, p.Z) for p in (brep.Vertices[k].Location for k in range(len(brep.Vertices)))],
+                        dtype=float).reshape(-1, 3)
+    polygons = []
+    for face in faces:
+        if len(face.Loops) != 1:
+            raise RhinoError(f"{where} has a face with a hole; mesh it in Rhino (_Mesh) and read the mesh")
+        polygon = [trim.StartVertexIndex for trim in face.OuterLoop.Trims]
+        polygons.append(polygon[::-1] if face.OrientationIsReversed else polygon)
+    triangles, _ = triangulate_polygons(vertices, [v for p in polygons for v in p], [len(p) for p in polygons])
+    return vertices, triangles
+
+
+def _closed_faces(vertices: np.ndarray, faces: np.ndarray, where: str, what: str) -> tuple[np.ndarray, np.ndarray]:
+    """The mesh, its vertices welded where they coincide if needed; an error unless it closes up."""
+    if not unmatched_edges(faces).size:
+        return vertices, faces
+    merged, welded = merge_vertices(vertices, faces)
+    welded = welded[(welded[:, 0] != welded[:, 1]) & (welded[:, 1] != welded[:, 2]) & (welded[:, 0] != welded[:, 2])]
+    if welded.size and not unmatched_edges(split_t_junctions(merged, welded)).size:
+        return merged, welded
+    open_edges = unmatched_edges(welded).shape[0] if welded.size else 0
+    raise RhinoError(f"{where} is a {what} that is not a closed solid ({open_edges} edges without a matching "
+                     "opposite edge); a block must be a closed, consistently oriented surface")
+
+
+def _label(strings: dict[str, str]):
+    """The label written by :func:`write_3dm`, rebuilt from its text."""
+    kind, text = strings.get("label_type", "text"), strings.get("label", "")
+    try:
+        if kind == "element":
+            return parse_symop(text)
+        if kind == "lozenge":
+            return Lozenge(*(int(v) for v in text.split(",")))
+        if kind == "integers":
+            return tuple(int(v) for v in text.split(",")) if text else ()
+        if kind == "int":
+            return int(text)
+    except (ValueError, TypeError):
+        return text
+    return text
+
+
+# --- classes ---------------------------------------------------------------------------------------
+
+def _classes(labels, types, info) -> tuple[np.ndarray, str]:
+    if labels and all(isinstance(label, Lozenge) for label in labels):
+        return np.array([label.orientation for label in labels], dtype=int), "orientation"
+    if labels and all(isinstance(label, GroupElement) for label in labels):
+        linear = [label.linear for label in labels]
+        order = {part: k for k, part in enumerate(sorted(set(linear), key=lambda p: (p != _IDENTITY, p)))}
+        return np.array([order[part] for part in linear], dtype=int), "coset"
+    if labels and all(_is_cell_label(label) for label in labels):
+        within = np.array([label[2] for label in labels], dtype=int)
+        cell_labels = (info or {}).get("cell_labels")
+        if cell_labels is not None and len(cell_labels) > within.max():
+            classes, kind = _classes(tuple(cell_labels), np.zeros(len(cell_labels), dtype=int), {})
+            if kind != "type":
+                return classes[within], kind
+        return within, "cell block"
+    return np.asarray(types, dtype=int).copy(), "type"
+
+
+def _is_cell_label(label) -> bool:
+    return isinstance(label, tuple) and len(label) == 3 and all(isinstance(v, (int, np.integer)) for v in label)
