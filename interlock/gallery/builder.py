@@ -2,9 +2,14 @@
 
 from __future__ import annotations
 
+import glob
+import hashlib
 import html
 import json
 import math
+import os
+import shutil
+import tempfile
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -12,11 +17,13 @@ from typing import Callable
 
 import numpy as np
 
+import interlock
 from interlock import wallpaper
 from interlock.blocks import (Assembly, cell_patch, escher_block, patch, periodic_cell, presets, random_hexagon,
                               rhomblock, rhomblock_assembly, staircase)
 from interlock.blocks.escher import Block, DeformationError
 from interlock.errors import GalleryError
+from interlock.files import PARTIAL, replace_folder, write_atomically
 from interlock.gallery.export import export
 from interlock.gallery.render import render
 from interlock.verify import check, contacts, criterion_4_3, periodic_check
@@ -24,7 +31,7 @@ from interlock.verify.check import beyond_first_order
 from interlock.gallery.motion import export_motion
 
 __all__ = ["Claim", "Entry", "EntryResult", "Gallery", "entries", "build", "finite_word", "ESCHER_GROUPS",
-           "REFLECTION_GROUPS", "MOTION_FRAMES"]
+           "REFLECTION_GROUPS", "MOTION_FRAMES", "MANIFEST"]
 
 #: Escher blocks with rotations only (main paper Sec. 3.2, Fig. 1 and Fig. 5).
 ESCHER_GROUPS = ("p1", "p2", "p3", "p4", "p6")
@@ -32,6 +39,8 @@ ESCHER_GROUPS = ("p1", "p2", "p3", "p4", "p6")
 REFLECTION_GROUPS = ("pm", "pg", "cm", "pmg", "pgg")
 #: Pictures of a finite motion shown (order 2), from its start to its last step.
 MOTION_FRAMES = 4
+#: The file that makes a folder a gallery: interlock's version, the seed, the entries and every file's SHA-256.
+MANIFEST = "manifest.json"
 
 
 @dataclass(frozen=True)
@@ -95,6 +104,8 @@ def entries(quick: bool = False, seed: int = 0) -> tuple[Entry, ...]:
     >>> [e.name for e in entries(quick=True)]
     ['escher-p4', 'escher-p1', 'ex3.5-cube-grid', 'rhomblock-hexagon-3x3x3-v0', 'rhomblock-staircase-1-1-0-v1']
     """
+    if isinstance(seed, (bool, np.bool_)) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise GalleryError(f"seed must be an integer >= 0, got {seed!r}")
     if quick:
         return (_escher("p4", seed, radius=1.0), _escher("p1", seed, radius=1.0), _cube_grid(),
                 _hexagon((3, 3, 3), 0, seed), _staircase((1, 1, 0), 1))
@@ -115,12 +126,20 @@ def build(folder, quick: bool = False, seed: int = 0, names=None, progress=None)
     ``NAME/tiling.png`` (where there is a tiling) and ``NAME/record.json`` with
     the parameters, the finite verdict with its frame, the periodic verdict
     (where there is a cell), Criterion 4.3 (Escher blocks), the paper's claims
-    with whether the verdicts agree, and timings.
+    with whether the verdicts agree, and timings.  :data:`MANIFEST` names
+    interlock's version, the seed, the entries and the SHA-256 of every file;
+    ``index.html`` is written from the records last.
+
+    The gallery is built in a new folder beside ``folder`` and put in its
+    place only when complete (:func:`interlock.files.replace_folder`), so a
+    run that is stopped leaves the previous gallery whole, and a gallery
+    never mixes the files of two runs.
 
     Parameters
     ----------
     folder : path
-        Created if missing.
+        Created if missing; an existing folder must be empty or a gallery
+        (it holds :data:`MANIFEST`), and is replaced as a whole.
     quick, seed : see :func:`entries`.
     names : iterable of str, optional
         Build only these entries.
@@ -133,12 +152,20 @@ def build(folder, quick: bool = False, seed: int = 0, names=None, progress=None)
         ``contradictions`` lists every claim a verdict contradicts; a correct
         package leaves it empty.
 
+    Raises
+    ------
+    GalleryError
+        An unknown entry name, a seed that is not an integer >= 0, or a
+        folder that cannot be created or is neither empty nor a gallery.
+
     Examples
     --------
     >>> import tempfile
     >>> g = build(tempfile.mkdtemp(), quick=True, names=["escher-p4"])
     >>> g.entries[0].record["periodic"]["status"], g.contradictions
     ('interlocked', ())
+    >>> json.loads((g.folder / MANIFEST).read_text())["entries"]
+    ['escher-p4']
     """
     start = time.perf_counter()
     folder = _folder(folder)
@@ -150,14 +177,23 @@ def build(folder, quick: bool = False, seed: int = 0, names=None, progress=None)
         if unknown:
             raise GalleryError(f"unknown gallery entries {unknown}; known: {sorted(known)}")
         chosen = [e for e in chosen if e.name in wanted]
-    results = []
-    for entry in chosen:
-        results.append(_build_entry(entry, folder, seed))
-        if progress is not None:
-            progress(entry.name)
-    index = _write_index(folder, results, quick, seed)
+    for stale in folder.parent.glob(f".{glob.escape(folder.name)}.*{PARTIAL}"):  # left by a run that was stopped
+        shutil.rmtree(stale, ignore_errors=True)
+    building = Path(tempfile.mkdtemp(prefix=f".{folder.name}.", suffix=PARTIAL, dir=folder.parent))
+    try:
+        results = []
+        for entry in chosen:
+            results.append(_build_entry(entry, building, seed))
+            if progress is not None:
+                progress(entry.name)
+        _write_manifest(building, results, quick, seed)
+        _write_index(building, results, quick, seed)
+        replace_folder(building, folder)
+    except BaseException:
+        shutil.rmtree(building, ignore_errors=True)
+        raise
     contradictions = tuple(c for r in results for c in r.contradictions)
-    return Gallery(folder, tuple(results), index, time.perf_counter() - start, contradictions)
+    return Gallery(folder, tuple(results), folder / "index.html", time.perf_counter() - start, contradictions)
 
 
 # --- entries --------------------------------------------------------------------------------------
@@ -257,7 +293,8 @@ def _undeformed(name: str) -> Entry:
                     lambda r: r["criterion_4_3"]["holds"] is False),
               _periodic_is("not interlocked", "Criterion 4.3 (H lifts out)"), _no_sliding_iff_criterion(),
               _finite_is(False, "Criterion 4.3 (H lifts out)"))
-    return Entry(f"escher-{name}-undeformed", f"{name}: undeformed prisms (Criterion 4.3 fails)", "escher", make, claims)
+    return Entry(f"escher-{name}-undeformed", f"{name}: undeformed prisms (Criterion 4.3 fails)", "escher", make,
+                 claims)
 
 
 def _fig1() -> Entry:
@@ -345,12 +382,30 @@ def _staircase(counts, variant: int) -> Entry:
 
 
 def _folder(folder) -> Path:
-    folder = Path(folder)
+    """The gallery folder, absolute; created if missing, else checked to be empty or a gallery."""
     try:
+        folder = Path(folder).resolve()
         folder.mkdir(parents=True, exist_ok=True)
+        contents = [p.name for p in folder.iterdir()]
     except OSError as error:
-        raise GalleryError(f"cannot create the gallery folder {folder}: {error.strerror}") from None
+        raise GalleryError(f"cannot create the gallery folder {folder}: {error.strerror or error}") from None
+    except TypeError:
+        raise GalleryError(f"the gallery folder must be a path, got {type(folder).__name__}") from None
+    if contents and MANIFEST not in contents:
+        raise GalleryError(f"{folder} holds other files ({', '.join(sorted(contents)[:3])}, ...) and no {MANIFEST}: "
+                           "a gallery replaces its folder as a whole, so give an empty or new folder")
+    if not os.access(folder.parent, os.W_OK):
+        raise GalleryError(f"cannot build the gallery beside {folder}: the folder {folder.parent} is not writable")
     return folder
+
+
+def _write_manifest(folder: Path, results, quick: bool, seed: int) -> Path:
+    """:data:`MANIFEST`: what was built, by which version and seed, and each file's SHA-256."""
+    files = sorted(p for p in folder.rglob("*") if p.is_file())
+    manifest = {"interlock": interlock.__version__, "seed": seed, "quick": quick,
+                "entries": [r.name for r in results],
+                "files": {_relative(p, folder): hashlib.sha256(p.read_bytes()).hexdigest() for p in files}}
+    return write_atomically(folder / MANIFEST, json.dumps(manifest, indent=1))
 
 
 def _build_entry(entry: Entry, folder: Path, seed: int) -> EntryResult:
@@ -415,8 +470,7 @@ def _build_entry(entry: Entry, folder: Path, seed: int) -> EntryResult:
     record["claims"] = claims
     record["timings"] = timings
     record["files"] = dict(written)
-    record_path = directory / "record.json"
-    record_path.write_text(json.dumps(record, indent=1, default=_json_default))
+    record_path = write_atomically(directory / "record.json", json.dumps(record, indent=1, default=_json_default))
     written["record.json"] = _relative(record_path, folder)
     return EntryResult(entry.name, record, written, tuple(contradictions))
 
@@ -455,9 +509,7 @@ def _write_index(folder: Path, results, quick: bool, seed: int) -> Path:
     for result in results:
         parts.append(_entry_html(result))
     parts.append("</body></html>")
-    index = folder / "index.html"
-    index.write_text("\n".join(parts), encoding="utf-8")
-    return index
+    return write_atomically(folder / "index.html", "\n".join(parts))
 
 
 def finite_word(record: dict) -> str:

@@ -19,6 +19,7 @@ from interlock.blocks.assembly import Assembly
 from interlock.blocks.meshfiles import (BLOCK_DATA, FIXED_DATA, FIXED_WORD, STL_FIXED_BIT, STL_MAX_FRAMED,
                                        STL_RECORD, file_header)
 from interlock.errors import GalleryError
+from interlock.files import atomic_write, write_atomically
 from interlock.gallery import appearance
 
 __all__ = ["export", "FORMATS"]
@@ -95,6 +96,10 @@ def export(obj, path, exploded=0.0) -> Path:
 
     Notes
     -----
+    Every file is written whole or not at all (:func:`interlock.files.atomic_write`): a
+    temporary file beside the target, synced and then renamed over it, so an interrupted
+    export leaves the old file (or none), never a part of the new one.
+
     World triangles come from one ``einsum`` per block type over all its
     blocks, so the cost is linear in the number of triangles: a 4,800-block
     RhomBlock assembly writes as STL in a fraction of a second.  GLB and 3MF
@@ -235,7 +240,7 @@ def _write_stl(assembly: Assembly, path: Path):
         header = file_header(len(assembly)).encode()
     else:
         header = b"interlock: too many blocks to index in the triangle attributes"
-    with open(path, "wb") as file:
+    with atomic_write(path) as temporary, open(temporary, "wb") as file:
         file.write(header.ljust(80, b" ")[:80])
         file.write(np.uint32(len(records)).tobytes())
         file.write(records.tobytes())
@@ -246,12 +251,11 @@ def _write_obj(assembly: Assembly, path: Path):
     classes, kind = appearance.block_classes(assembly)
     colours = appearance.block_colours(assembly)
     materials = path.with_suffix(".mtl")
-    with open(materials, "w") as file:
-        for c in np.unique(classes):
-            rgba = colours[np.argmax(classes == c)] / 255
-            file.write(f"newmtl class_{c}\nKd {rgba[0]:.6f} {rgba[1]:.6f} {rgba[2]:.6f}\nd {rgba[3]:.6f}\n\n")
+    write_atomically(materials, "".join(
+        f"newmtl class_{c}\nKd {rgba[0]:.6f} {rgba[1]:.6f} {rgba[2]:.6f}\nd {rgba[3]:.6f}\n\n"
+        for c, rgba in ((c, colours[np.argmax(classes == c)] / 255) for c in np.unique(classes))))
     frame = set(assembly.frame)
-    with open(path, "w") as file:
+    with atomic_write(path) as temporary, open(temporary, "w") as file:
         file.write(f"# {_header(assembly, len(faces))}\n")
         file.write(f"# one object per block, named 'fixed' in the frame; materials by {kind}\n")
         file.write(f"mtllib {materials.name}\n")
@@ -283,7 +287,7 @@ def _write_ply(assembly: Assembly, path: Path):
         f"property uchar {FIXED_DATA}",
         "property uchar red", "property uchar green", "property uchar blue", "property uchar alpha",
         "end_header", ""])
-    with open(path, "wb") as file:
+    with atomic_write(path) as temporary, open(temporary, "wb") as file:
         file.write(header.encode("ascii"))
         file.write(vertices.astype("<f8").tobytes())
         file.write(face_records.tobytes())
@@ -302,7 +306,7 @@ def _write_glb(assembly: Assembly, path: Path):
         scene.graph.update(frame_from=scene.graph.base_frame, frame_to=_block_name(i, frame), matrix=placement,
                            geometry=f"part_{k}")
     scene.metadata["interlock"] = _header(assembly)  # the scene's extras
-    path.write_bytes(scene.export(file_type="glb"))
+    write_atomically(path, scene.export(file_type="glb"))
 
 
 def _write_3mf(assembly: Assembly, path: Path):
@@ -330,7 +334,7 @@ def _write_3mf(assembly: Assembly, path: Path):
         transform = " ".join(map(repr, placement[:3, :4].T.ravel().tolist()))
         model.write(f'<item objectid="{k + 2}" transform="{transform}" partnumber="{_block_name(i, frame)}"/>\n')
     model.write("</build>\n</model>\n")
-    with zipfile.ZipFile(path, "w", compression=zipfile.ZIP_DEFLATED) as package:
+    with atomic_write(path) as temporary, zipfile.ZipFile(temporary, "w", compression=zipfile.ZIP_DEFLATED) as package:
         package.writestr("[Content_Types].xml", _3MF_CONTENT_TYPES)
         package.writestr("_rels/.rels", _3MF_RELATIONSHIPS)
         package.writestr("3D/3dmodel.model", model.getvalue())
@@ -359,10 +363,11 @@ def _write_meshio(assembly: Assembly, path: Path):
                  "mirrored": [assembly.mirrored[blocks].astype(np.int64)],
                  FIXED_DATA: [_fixed(assembly)[blocks].astype(np.int64)]}
     mesh = meshio.Mesh(vertices, [("triangle", faces)], cell_data=cell_data)
-    if path.suffix.lower() == ".xdmf":
-        meshio.write(path, mesh, file_format="xdmf", data_format="XML")
-    else:
-        meshio.write(path, mesh, file_format="vtu")
+    with atomic_write(path) as temporary:
+        if path.suffix.lower() == ".xdmf":
+            meshio.write(temporary, mesh, file_format="xdmf", data_format="XML")
+        else:
+            meshio.write(temporary, mesh, file_format="vtu")
 
 
 _WRITERS = {".stl": _write_stl, ".obj": _write_obj, ".ply": _write_ply, ".glb": _write_glb, ".3mf": _write_3mf,

@@ -16,6 +16,7 @@ from interlock.blocks.lozenge import LATTICE_BASIS, Lozenge, LozengeTiling
 from interlock.blocks.orbits import patch
 from interlock.blocks.rhomblock import rhomblock_assembly
 from interlock.errors import GalleryError, InterlockError
+from interlock.files import atomic_write
 from interlock.gallery.appearance import PALETTE, as_assembly, block_classes, block_colours, exploded_factor
 from interlock.gallery.appearance import exploded as explode
 
@@ -151,7 +152,8 @@ def render(obj, path, *, view: str = "auto", exploded: float = 0.0, radius: floa
             _draw_block_tilings(fig, mpl, obj, radius, top)
         else:
             _draw_lozenges(fig, mpl, _lozenge_tiling(obj), radius, top)
-        fig.savefig(path, format="png", dpi=dpi, facecolor="white")
+        with atomic_write(path) as temporary:  # whole or not at all (interlock.files)
+            fig.savefig(temporary, format="png", dpi=dpi, facecolor="white")
     except OSError as error:
         raise GalleryError(f"cannot write {path}: {error.strerror or error}") from None
     return path

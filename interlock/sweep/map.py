@@ -6,6 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
+from interlock.files import atomic_write
 from interlock.sweep.spec import SweepError
 
 __all__ = ["verdict_map", "CATEGORIES", "COLOURS"]
@@ -137,7 +138,8 @@ def verdict_map(records, x: str, y: str, verdict: str = "periodic", path=None, t
     if path is None:
         return fig
     try:
-        fig.savefig(path, format="png", dpi=150, facecolor="white")
+        with atomic_write(path) as temporary:  # whole or not at all (interlock.files)
+            fig.savefig(temporary, format="png", dpi=150, facecolor="white")
     except OSError as error:
         raise SweepError(f"cannot write {path}: {error.strerror or error}") from None
     finally:

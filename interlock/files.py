@@ -1,0 +1,147 @@
+"""Files written whole or not at all: a temporary file beside the target, synced, then renamed over it.
+
+A reader (or a user after ``kill -9``) sees the old file or the complete new
+one, never a part: :func:`atomic_write` for one file, :func:`replace_folder`
+for a folder built in full beside the one it replaces.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import ctypes
+import os
+import shutil
+import tempfile
+from collections.abc import Iterator
+from pathlib import Path
+
+__all__ = ["atomic_write", "write_atomically", "replace_folder", "PARTIAL"]
+
+#: The marker in the names of temporary files and folders (``.NAME.XXXX.partial.SUFFIX``); a killed write
+#: leaves such a file beside its target, never a damaged target.
+PARTIAL = ".partial"
+
+
+@contextlib.contextmanager
+def atomic_write(path) -> Iterator[Path]:
+    """A temporary path beside ``path`` to write; on success it replaces ``path`` in one step.
+
+    The temporary file is in the target's folder (so the rename stays on one
+    file system) and ends in the target's suffix (for writers that choose the
+    format by suffix).  When the ``with`` block ends without an error, the
+    file is flushed to disk (``fsync``), renamed over ``path``
+    (``os.replace``), and the folder is synced; on an error it is removed and
+    ``path`` is untouched.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The file to write, in an existing folder.
+
+    Yields
+    ------
+    pathlib.Path
+        The temporary file (exists, empty) to write.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> folder = Path(tempfile.mkdtemp())
+    >>> with atomic_write(folder / "a.txt") as temporary:
+    ...     _ = temporary.write_text("whole")
+    >>> (folder / "a.txt").read_text(), sorted(p.name for p in folder.iterdir())
+    ('whole', ['a.txt'])
+    """
+    path = Path(path)
+    descriptor, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=PARTIAL + path.suffix, dir=path.parent)
+    os.close(descriptor)
+    temporary = Path(name)
+    try:
+        os.chmod(temporary, 0o666 & ~_umask())  # as an ordinary new file, not mkstemp's 0600
+        yield temporary
+        _sync_file(temporary)
+        os.replace(temporary, path)
+    except BaseException:
+        temporary.unlink(missing_ok=True)
+        raise
+    _sync_folder(path.parent)
+
+
+def write_atomically(path, data: str | bytes) -> Path:
+    """Write text (UTF-8) or bytes to ``path`` through :func:`atomic_write`; return the path.
+
+    >>> import tempfile
+    >>> write_atomically(Path(tempfile.mkdtemp()) / "b.txt", "x").read_text()
+    'x'
+    """
+    path = Path(path)
+    with atomic_write(path) as temporary:
+        temporary.write_bytes(data.encode("utf-8") if isinstance(data, str) else data)
+    return path
+
+
+def replace_folder(built, target) -> None:
+    """Put the complete folder ``built`` in the place of ``target`` (which may be missing), and remove the old one.
+
+    ``built`` must be on the file system of ``target`` (a sibling, e.g. from
+    :func:`tempfile.mkdtemp` with ``dir=target.parent``).  On Linux the two
+    are exchanged in one step (``renameat2`` with ``RENAME_EXCHANGE``);
+    elsewhere the old folder is renamed aside first, so that for a moment
+    ``target`` is missing, but never a mixture of old and new files.
+
+    >>> import tempfile
+    >>> parent = Path(tempfile.mkdtemp())
+    >>> (parent / "g").mkdir(); _ = (parent / "g" / "old.txt").write_text("old")
+    >>> new = Path(tempfile.mkdtemp(dir=parent)); _ = (new / "new.txt").write_text("new")
+    >>> replace_folder(new, parent / "g")
+    >>> sorted(p.name for p in (parent / "g").iterdir()), sorted(p.name for p in parent.iterdir())
+    (['new.txt'], ['g'])
+    """
+    built, target = Path(built), Path(target)
+    _sync_folder(built)
+    if not target.exists():
+        os.rename(built, target)
+    elif _exchange(built, target):
+        shutil.rmtree(built)  # now the old folder
+    else:
+        old = Path(tempfile.mkdtemp(prefix=f".{target.name}.", suffix=".old", dir=target.parent))
+        os.rename(target, old / target.name)
+        os.rename(built, target)
+        shutil.rmtree(old)
+    _sync_folder(target.parent)
+
+
+def _exchange(first: Path, second: Path) -> bool:
+    """Swap two paths in one step (Linux ``renameat2(..., RENAME_EXCHANGE)``); False where that is unavailable."""
+    try:
+        renameat2 = ctypes.CDLL(None, use_errno=True).renameat2
+    except (AttributeError, OSError):
+        return False
+    at_cwd, exchange = -100, 2  # AT_FDCWD, RENAME_EXCHANGE
+    renameat2.argtypes = [ctypes.c_int, ctypes.c_char_p, ctypes.c_int, ctypes.c_char_p, ctypes.c_uint]
+    return renameat2(at_cwd, os.fsencode(first), at_cwd, os.fsencode(second), exchange) == 0
+
+
+def _sync_file(path: Path) -> None:
+    with open(path, "rb+") as file:
+        os.fsync(file.fileno())
+
+
+def _sync_folder(folder: Path) -> None:
+    """Make a rename in ``folder`` durable (where folders can be opened; not on Windows)."""
+    try:
+        descriptor = os.open(folder, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(descriptor)
+    except OSError:
+        pass
+    finally:
+        os.close(descriptor)
+
+
+def _umask() -> int:
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
