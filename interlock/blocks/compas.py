@@ -1,8 +1,11 @@
-"""Assemblies from COMPAS assembly JSON (compas_assembly / compas_cra), read without COMPAS."""
+"""COMPAS assembly JSON (compas_assembly / compas_cra), read and written without COMPAS."""
 
 from __future__ import annotations
 
 import json
+import os
+import tempfile
+import uuid
 from pathlib import Path
 
 import numpy as np
@@ -11,7 +14,8 @@ import trimesh
 from interlock import deprecation
 from interlock.errors import AssemblyError
 
-__all__ = ["read_compas", "UPSTREAM_SUPPORTS", "COMPAS_DTYPES"]
+__all__ = ["read_compas", "write_compas", "UPSTREAM_SUPPORTS", "COMPAS_DTYPES", "BLOCK_DTYPE", "GRAPH_DTYPE",
+           "INFO_ATTRIBUTE"]
 
 #: Node keys that the upstream compas_cra examples fix, by file stem, for the sample files that mark no
 #: block ``is_support`` (``data/compas_cra/README.md``): the wedges, ``A``, ``H`` and the bridge stand on
@@ -27,6 +31,14 @@ UPSTREAM_SUPPORTS: dict[str, tuple[int, ...]] = {
 
 #: ``dtype`` values of the assembly types this reader understands.
 COMPAS_DTYPES = ("compas_assembly.datastructures/Assembly", "compas_cra.datastructures/CRA_Assembly")
+#: ``dtype`` of a block (a COMPAS mesh) and of the assembly's graph in files :func:`write_compas` writes.
+BLOCK_DTYPE = "compas_assembly.datastructures/Block"
+GRAPH_DTYPE = "compas.datastructures/Graph"
+#: The assembly attribute holding ``Assembly.info`` in files :func:`write_compas` writes.
+INFO_ATTRIBUTE = "interlock"
+# Node attributes that compas_assembly's Assembly declares (its defaults), plus the block's centroid.
+_NODE_DEFAULTS = {"x": 0.0, "y": 0.0, "z": 0.0, "block": None, "is_support": False, "section": None,
+                  "mesh_size": None, "displacement": [0, 0, 0, 0, 0, 0], "name": None, "label": None}
 
 
 def read_compas(path, supports=None) -> tuple[list[trimesh.Trimesh], list[int], list[int], dict]:
@@ -37,7 +49,7 @@ def read_compas(path, supports=None) -> tuple[list[trimesh.Trimesh], list[int], 
     increasing node-key order), ``labels`` the node keys.
     """
     path = Path(path)
-    nodes, dtype = _nodes(path)
+    nodes, dtype, stored = _nodes(path)
     keys = sorted(nodes, key=_node_key)
     meshes = [_block_mesh(path, key, nodes[key]) for key in keys]
     labels = [_node_key(key) for key in keys]
@@ -48,12 +60,170 @@ def read_compas(path, supports=None) -> tuple[list[trimesh.Trimesh], list[int], 
         raise AssemblyError(f"support keys {unknown} are not nodes of {path.name}; its node keys are "
                             f"{labels[0]}..{labels[-1]}")
     frame = sorted(index_of[key] for key in frame_keys)
-    info = {"source": [str(path)], "format": "compas", "dtype": dtype, "supports_from": origin}
+    info = {**stored, "source": [str(path)], "format": "compas", "dtype": dtype, "supports_from": origin}
+    names = [nodes[key].get("name") for key in keys]
+    if any(isinstance(name, str) for name in names):
+        info["names"] = names
     return meshes, labels, frame, info
 
 
-def _nodes(path: Path) -> tuple[dict, str]:
-    """The graph's node dict and the top-level dtype; clear errors for anything else."""
+def write_compas(assembly, path) -> Path:
+    """Write an assembly as COMPAS assembly JSON, the schema :func:`read_compas` reads.
+
+    The file is what ``compas.json_dump`` writes for a
+    ``compas_assembly.datastructures.Assembly`` (compas 2, compas_assembly 0.7,
+    the assemblies compas_cra 0.8 solves): one graph node per block, keyed by
+    the block index, holding
+
+    - ``block``: the block as a COMPAS mesh in world coordinates, outward faces;
+      coplanar triangles that meet along edges are merged into one polygon face
+      (so interfaces come out as whole polygons), vertices written exactly;
+    - ``is_support``: whether the block is in the frame;
+    - ``name`` (``block_0007``), ``label`` (the label as text) and ``x, y, z``
+      (the block's centroid).
+
+    ``Assembly.info`` is kept in the assembly attribute :data:`INFO_ATTRIBUTE`
+    (numbers, text and lists as JSON; other values as text).  The graph has no
+    edges: interfaces are for COMPAS to find (``compas_assembly.algorithms.assembly_interfaces``).
+    The file is written under a temporary name beside ``path`` and moved into place.
+
+    Parameters
+    ----------
+    assembly : Assembly
+    path : str or path-like
+
+    Returns
+    -------
+    pathlib.Path
+
+    Raises
+    ------
+    AssemblyError
+        If the assembly has no blocks or the file cannot be written.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from interlock.blocks import load_compas, presets
+    >>> grid = presets.cube_grid()
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     back = load_compas(write_compas(grid, Path(folder) / "grid.json"))
+    >>> len(back), back.frame == grid.frame, back.info["names"][:2], back.info["preset"]
+    (9, True, ['block_0000', 'block_0001'], 'cube_grid')
+    """
+    path = Path(path)
+    if not len(assembly):
+        raise AssemblyError(f"nothing to write to {path.name}: the assembly has no blocks")
+    fixed = set(assembly.frame)
+    nodes = {}
+    for i in range(len(assembly)):
+        mesh = assembly.mesh(i)
+        x, y, z = (float(c) for c in assembly.centroids[i])
+        nodes[str(i)] = {"block": {"dtype": BLOCK_DTYPE, "data": _mesh_data(mesh, i),
+                                   "guid": str(uuid.uuid5(uuid.NAMESPACE_OID, f"interlock block {i}"))},
+                         "is_support": i in fixed, "name": f"block_{i:04d}", "label": str(assembly.labels[i]),
+                         "x": x, "y": y, "z": z}
+    graph = {"attributes": {}, "default_node_attributes": _NODE_DEFAULTS,
+             "default_edge_attributes": {"interfaces": None}, "node": nodes, "edge": {key: {} for key in nodes},
+             "max_node": len(assembly) - 1}
+    document = {"dtype": COMPAS_DTYPES[0],
+                "data": {"attributes": {"name": "Assembly", INFO_ATTRIBUTE: _json_safe(assembly.info)},
+                         "graph": {"dtype": GRAPH_DTYPE, "data": graph}}}
+    _write_atomically(json.dumps(document, allow_nan=False), path)
+    return path
+
+
+def _mesh_data(mesh: trimesh.Trimesh, i: int) -> dict:
+    """A COMPAS mesh's data: the used vertices, faces as polygons (coplanar triangles merged)."""
+    polygons = _polygons(mesh)
+    used = np.unique(np.concatenate([np.asarray(p) for p in polygons]))
+    number = {int(v): k for k, v in enumerate(used.tolist())}
+    vertex = {str(k): dict(zip("xyz", p)) for k, p in enumerate(mesh.vertices[used].tolist())}
+    face = {str(f): [number[v] for v in polygon] for f, polygon in enumerate(polygons)}
+    return {"attributes": {"name": f"block_{i:04d}", "node": i},
+            "default_vertex_attributes": {"x": 0.0, "y": 0.0, "z": 0.0}, "default_edge_attributes": {},
+            "default_face_attributes": {}, "vertex": vertex, "face": face,
+            "facedata": {key: {} for key in face}, "edgedata": {}, "max_vertex": len(vertex) - 1,
+            "max_face": len(face) - 1}
+
+
+def _polygons(mesh: trimesh.Trimesh) -> list[list[int]]:
+    """The faces of a closed triangle mesh, each set of coplanar triangles that meet along edges as one polygon.
+
+    A set whose outline is not one loop (a face with a hole, or touching itself at a
+    corner) stays triangles.  Polygon corners keep the vertices of the mesh, so
+    neighbouring faces still share their edges.
+    """
+    faces = np.asarray(mesh.faces, dtype=np.int64)
+    merged = np.zeros(len(faces), dtype=bool)
+    polygons = []
+    for facet in mesh.facets:
+        loop = _outline(faces[facet])
+        if loop is not None:
+            polygons.append(loop)
+            merged[facet] = True
+    return polygons + faces[~merged].tolist()
+
+
+def _outline(triangles: np.ndarray) -> list[int] | None:
+    """The boundary of a patch of triangles as one loop of vertices, oriented like them; None unless it is one loop."""
+    directed = triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2).tolist()
+    inside = set(map(tuple, directed))
+    following = {}
+    for a, b in directed:
+        if (b, a) in inside:
+            continue
+        if a in following:
+            return None
+        following[a] = b
+    if not following:
+        return None
+    start = next(iter(following))
+    loop, vertex = [start], following[start]
+    while vertex != start and len(loop) <= len(following):
+        loop.append(vertex)
+        vertex = following.get(vertex, start)
+    return loop if len(loop) == len(following) and vertex == start else None
+
+
+def _json_safe(value):
+    """``value`` with numpy data as lists and numbers, dictionary keys as text, and other objects as text."""
+    if isinstance(value, dict):
+        return {str(k): _json_safe(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_json_safe(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return _json_safe(value.tolist())
+    if isinstance(value, np.generic):
+        return _json_safe(value.item())
+    if isinstance(value, float) and not np.isfinite(value):
+        return str(value)
+    if value is None or isinstance(value, (bool, int, float, str)):
+        return value
+    return str(value)
+
+
+def _write_atomically(text: str, path: Path):
+    folder = path.parent
+    try:
+        if not folder.is_dir():
+            raise AssemblyError(f"cannot write {path}: the folder {folder} does not exist")
+        handle, temporary = tempfile.mkstemp(dir=folder, prefix=f".{path.stem}-", suffix=".json")
+    except OSError as error:
+        raise AssemblyError(f"cannot write {path}: {error.strerror or error}") from None
+    try:
+        with os.fdopen(handle, "w", encoding="utf-8") as stream:
+            stream.write(text)
+        os.replace(temporary, path)
+    except OSError as error:
+        raise AssemblyError(f"cannot write {path}: {error.strerror or error}") from None
+    finally:
+        if os.path.exists(temporary):
+            os.unlink(temporary)
+
+
+def _nodes(path: Path) -> tuple[dict, str, dict]:
+    """The graph's node dict, the top-level dtype and the stored ``info`` (:data:`INFO_ATTRIBUTE`); clear errors."""
     if not path.is_file():
         raise AssemblyError(f"COMPAS file {path} does not exist")
     try:
@@ -70,7 +240,9 @@ def _nodes(path: Path) -> tuple[dict, str]:
                             f"{COMPAS_DTYPES} and data.graph.data.node, got dtype {dtype!r}")
     if not nodes:
         raise AssemblyError(f"{path} is a COMPAS assembly without blocks")
-    return nodes, dtype
+    attributes = data.get("attributes")
+    stored = attributes.get(INFO_ATTRIBUTE) if isinstance(attributes, dict) else None
+    return nodes, dtype, dict(stored) if isinstance(stored, dict) else {}
 
 
 def _node_key(key):
