@@ -34,7 +34,7 @@ COMPAS_DTYPES = ("compas_assembly.datastructures/Assembly", "compas_cra.datastru
 #: ``dtype`` of a block (a COMPAS mesh) and of the assembly's graph in files :func:`write_compas` writes.
 BLOCK_DTYPE = "compas_assembly.datastructures/Block"
 GRAPH_DTYPE = "compas.datastructures/Graph"
-#: The assembly attribute holding ``Assembly.info`` in files :func:`write_compas` writes.
+#: The assembly attribute holding ``Assembly.info`` (as JSON text) in files :func:`write_compas` writes.
 INFO_ATTRIBUTE = "interlock"
 # Node attributes that compas_assembly's Assembly declares (its defaults), plus the block's centroid.
 _NODE_DEFAULTS = {"x": 0.0, "y": 0.0, "z": 0.0, "block": None, "is_support": False, "section": None,
@@ -83,7 +83,8 @@ def write_compas(assembly, path) -> Path:
       (the block's centroid).
 
     ``Assembly.info`` is kept in the assembly attribute :data:`INFO_ATTRIBUTE`
-    (numbers, text and lists as JSON; other values as text).  The graph has no
+    as a JSON text (numbers, text and lists as such, other values as text; a
+    text, because COMPAS would take a nested ``dtype`` key for an object).  The graph has no
     edges: interfaces are for COMPAS to find (``compas_assembly.algorithms.assembly_interfaces``).
     The file is written under a temporary name beside ``path`` and moved into place.
 
@@ -127,7 +128,7 @@ def write_compas(assembly, path) -> Path:
              "default_edge_attributes": {"interfaces": None}, "node": nodes, "edge": {key: {} for key in nodes},
              "max_node": len(assembly) - 1}
     document = {"dtype": COMPAS_DTYPES[0],
-                "data": {"attributes": {"name": "Assembly", INFO_ATTRIBUTE: _json_safe(assembly.info)},
+                "data": {"attributes": {"name": "Assembly", INFO_ATTRIBUTE: json.dumps(_json_safe(assembly.info))},
                          "graph": {"dtype": GRAPH_DTYPE, "data": graph}}}
     _write_atomically(json.dumps(document, allow_nan=False), path)
     return path
@@ -242,6 +243,10 @@ def _nodes(path: Path) -> tuple[dict, str, dict]:
         raise AssemblyError(f"{path} is a COMPAS assembly without blocks")
     attributes = data.get("attributes")
     stored = attributes.get(INFO_ATTRIBUTE) if isinstance(attributes, dict) else None
+    try:
+        stored = json.loads(stored) if isinstance(stored, str) else stored
+    except json.JSONDecodeError:
+        stored = None
     return nodes, dtype, dict(stored) if isinstance(stored, dict) else {}
 
 

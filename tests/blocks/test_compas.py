@@ -1,4 +1,4 @@
-"""Reading COMPAS assembly JSON (compas_assembly / compas_cra) without COMPAS."""
+"""COMPAS assembly JSON (compas_assembly / compas_cra): read and written without COMPAS, loaded in COMPAS."""
 
 import json
 
@@ -7,7 +7,7 @@ import pytest
 import trimesh
 
 from interlock.blocks import Assembly, load_compas
-from interlock.blocks.compas import COMPAS_DTYPES, UPSTREAM_SUPPORTS
+from interlock.blocks.compas import COMPAS_DTYPES, UPSTREAM_SUPPORTS, write_compas
 from interlock.errors import InterlockError
 
 
@@ -118,3 +118,93 @@ def test_assembly_load_dispatches_json(reference_data):
     a = Assembly.load(reference_data / "compas_cra" / "cubes.json")
     assert len(a) == 3 and a.frame == (0,) and a.info["format"] == "compas"
     assert Assembly.load(reference_data / "compas_cra" / "cubes.json", frame=[2]).frame == (2,)
+
+
+# --- writing -------------------------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def generated():
+    """A p4 Escher patch of radius 2 cells and RhomBlocks on a 4x4x4 hexagon, outer rings fixed."""
+    import math
+
+    from interlock import wallpaper
+    from interlock.blocks import escher_block, patch, random_hexagon, rhomblock_assembly
+
+    group = wallpaper.group("p4")
+    p4 = patch(escher_block(group, {0: [(0.25, 0.1)], 1: [(0.4, 0.25)]}), 2 * math.sqrt(group.cell_area),
+               frame="boundary")
+    return {"p4": p4, "rhomblock": rhomblock_assembly(random_hexagon(4, 4, 4, seed=3), variant=1, frame="boundary")}
+
+
+@pytest.mark.parametrize("name", ["p4", "rhomblock"])
+def test_write_compas_round_trips_through_load_compas(tmp_path, generated, name):
+    assembly = generated[name]
+    back = load_compas(write_compas(assembly, tmp_path / f"{name}.json"))
+    assert len(back) == len(assembly) and back.labels == tuple(range(len(assembly)))
+    np.testing.assert_allclose(back.volumes, assembly.volumes, rtol=1e-12)
+    np.testing.assert_allclose(back.centroids, assembly.centroids, rtol=0, atol=1e-12 * assembly.scale)
+    assert back.frame == assembly.frame and back.info["supports_from"] == "file"
+    assert back.info["names"] == [f"block_{i:04d}" for i in range(len(assembly))]
+    assert {k: v for k, v in back.info.items() if k in ("group", "block", "variant")} == \
+        {k: v for k, v in assembly.info.items() if k in ("group", "block", "variant")}
+
+
+def test_written_nodes_hold_names_labels_supports_and_polygon_faces(tmp_path, generated):
+    assembly = generated["p4"]
+    document = json.loads(write_compas(assembly, tmp_path / "p4.json").read_text())
+    assert document["dtype"] == COMPAS_DTYPES[0]
+    nodes = document["data"]["graph"]["data"]["node"]
+    assert list(nodes) == [str(i) for i in range(len(assembly))]
+    for i, node in nodes.items():
+        assert node["name"] == f"block_{int(i):04d}" and node["label"] == str(assembly.labels[int(i)])
+        assert node["is_support"] == (int(i) in assembly.frame)
+    # coplanar triangles are merged: the bottom and the top of an Escher block are one face each
+    faces = nodes["0"]["block"]["data"]["face"].values()
+    assert len(faces) < len(assembly.mesh(0).faces) and max(len(f) for f in faces) > 4
+
+
+def test_cubes_are_written_as_quadrilaterals_exactly(tmp_path):
+    cubes = Assembly.from_meshes(_stack(2), frame=[0])
+    document = json.loads(write_compas(cubes, tmp_path / "stack.json").read_text())
+    block = document["data"]["graph"]["data"]["node"]["1"]["block"]["data"]
+    assert sorted(len(f) for f in block["face"].values()) == [4] * 6
+    assert sorted(tuple(v.values()) for v in block["vertex"].values()) == \
+        sorted(map(tuple, _stack(2)[1].vertices.tolist()))
+
+
+def test_reference_files_round_trip_with_their_supports(tmp_path, reference_data):
+    original = load_compas(reference_data / "compas_cra" / "type-a.json")
+    back = load_compas(write_compas(original, tmp_path / "type-a-copy.json"))
+    assert len(back) == 3 and back.frame == (0, 1) and back.info["supports_from"] == "file"
+    np.testing.assert_allclose(back.volumes, original.volumes, rtol=1e-12)
+
+
+def test_written_file_loads_in_compas(tmp_path, generated):
+    compas = pytest.importorskip("compas")
+    pytest.importorskip("compas_assembly")
+    assembly = generated["rhomblock"]
+    loaded = compas.json_load(str(write_compas(assembly, tmp_path / "hexagon.json")))
+    assert type(loaded).__name__ == "Assembly" and loaded.graph.number_of_nodes() == len(assembly)
+    assert sorted(n for n in loaded.graph.nodes() if loaded.graph.node_attribute(n, "is_support")) == \
+        list(assembly.frame)
+    volumes = [loaded.graph.node_attribute(n, "block").volume() for n in sorted(loaded.graph.nodes())]
+    np.testing.assert_allclose(volumes, assembly.volumes, rtol=1e-9)
+    assert loaded.graph.node_attribute(0, "name") == "block_0000"
+
+
+def test_info_with_a_dtype_key_does_not_confuse_compas(tmp_path, reference_data):
+    compas = pytest.importorskip("compas")
+    pytest.importorskip("compas_assembly")
+    original = load_compas(reference_data / "compas_cra" / "cubes.json")  # its info holds "dtype"
+    loaded = compas.json_load(str(write_compas(original, tmp_path / "cubes-copy.json")))
+    assert loaded.graph.number_of_nodes() == 3
+
+
+def test_write_compas_errors(tmp_path):
+    with pytest.raises(InterlockError, match="has no blocks"):
+        write_compas(Assembly.from_meshes([]), tmp_path / "empty.json")
+    with pytest.raises(InterlockError, match="does not exist"):
+        write_compas(Assembly.from_meshes(_stack(1)), tmp_path / "no" / "x.json")
+    path = write_compas(Assembly.from_meshes(_stack(1)), tmp_path / "one.json")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["one.json"]  # no temporary file left
+    assert len(load_compas(path)) == 1
