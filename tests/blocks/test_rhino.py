@@ -1,7 +1,9 @@
 """Rhino .3dm files: round trips of generated assemblies, files drawn by a person, and bad input."""
 
 import math
+import subprocess
 import sys
+import textwrap
 
 import numpy as np
 import pytest
@@ -135,6 +137,29 @@ def test_a_file_drawn_by_a_person_loads_with_its_frame(tmp_path):
     assert sorted(row.neighbours.edges) == [(0, 1), (1, 2), (2, 3), (3, 4)]
     assert read_3dm(path, frame=[2]).frame == (2,)
     assert read_3dm(path, frame_layer="blocks").frame == (1, 2, 3)
+
+
+def test_a_curved_polysurface_with_render_meshes_is_read_through_them(tmp_path):
+    """Rhino saves render meshes with polysurfaces; a sphere then reads as its render mesh.  rhino3dm frees a mesh
+    given to ``BrepFace.SetMesh`` twice at exit, so the file is made in a process that ends without cleaning up."""
+    path = tmp_path / "sphere.3dm"
+    script = textwrap.dedent(f"""
+        import os, rhino3dm, trimesh
+        brep = rhino3dm.Brep.CreateFromSphere(rhino3dm.Sphere(rhino3dm.Point3d(0, 0, 0), 1.0))
+        sphere, mesh = trimesh.creation.icosphere(2), rhino3dm.Mesh()
+        for x, y, z in sphere.vertices.tolist():
+            mesh.Vertices.AddPoint3d(x, y, z)
+        for a, b, c in sphere.faces.tolist():
+            mesh.Faces.AddFace(a, b, c)
+        assert brep.Faces[0].SetMesh(mesh, rhino3dm.MeshType.Render)
+        model = rhino3dm.File3dm()
+        model.Objects.AddBrep(brep)
+        assert model.Write({str(path)!r}, 7)
+        os._exit(0)
+    """)
+    subprocess.run([sys.executable, "-c", script], check=True, timeout=120)
+    ball = read_3dm(path)
+    assert len(ball) == 1 and ball.volumes[0] == pytest.approx(trimesh.creation.icosphere(2).volume, rel=1e-12)
 
 
 def test_a_file_without_a_frame_layer_has_no_frame(tmp_path):
