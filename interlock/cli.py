@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+import warnings
 
 import interlock
 from interlock import wallpaper
@@ -92,7 +93,8 @@ def _parser() -> argparse.ArgumentParser:
                           help="intermediate points of one edge (repeat for more edges), e.g. 0:0.25,0.1")
     periodic.add_argument("--height", type=float, default=1.0, help="block height (default 1)")
     _lattice_arguments(periodic)
-    periodic.add_argument("--staircase", metavar="N0,N1,N2", help="RhomBlocks on the staircase tiling with these counts")
+    periodic.add_argument("--staircase", metavar="N0,N1,N2",
+                          help="RhomBlocks on the staircase tiling with these counts")
     periodic.add_argument("--variant", type=int, default=0, choices=(0, 1), help="RhomBlock assembly variant")
     periodic.add_argument("--translational", action="store_true", help="translations only")
     periodic.add_argument("--certify", action="store_true", help="replay the reduction in exact arithmetic")
@@ -117,13 +119,16 @@ def _parser() -> argparse.ArgumentParser:
         description="Rigid-block equilibrium (RBE): compression-only forces at the contact vertices, linearised "
                     "friction cones, self-weight; coupled rigid-block analysis (CRA) also asks for a virtual "
                     "motion that realises them. COMPAS assembly JSON takes its supports as the frame.",
-        epilog="examples:\n  interlock stability type-a.json --mu 0.84\n  interlock stability H.json --mu 0.84 --method cra\n"
+        epilog="examples:\n  interlock stability type-a.json --mu 0.84\n"
+               "  interlock stability H.json --mu 0.84 --method cra\n"
                "  interlock stability type-c.json --mu 0.2 --tilt-axis xy30 --json",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     stability.add_argument("paths", nargs="+", help="a COMPAS JSON file, or mesh files (one per block)")
     stability.add_argument("--mu", type=float, required=True, help="friction coefficient")
-    stability.add_argument("--method", default="rbe", choices=("rbe", "cra"), help="rbe: equilibrium only (default); cra: equilibrium realised by a virtual motion (exact MILP, slower)")
+    stability.add_argument("--method", default="rbe", choices=("rbe", "cra"),
+                           help="rbe: equilibrium only (default); cra: equilibrium realised by a virtual motion "
+                                "(exact MILP, slower)")
     stability.add_argument("--fixed", default=None, metavar="LIST", help="frame for mesh files, e.g. 0,1")
     stability.add_argument("--density", type=float, default=1.0, help="density of every block (default 1)")
     stability.add_argument("--cone", default="paper", choices=("paper", "inner"),
@@ -148,7 +153,10 @@ def _parser() -> argparse.ArgumentParser:
     sweep.add_argument("-o", "--output", required=True, metavar="RESULTS", help="*.jsonl or *.parquet")
     sweep.add_argument("--scheduler", metavar="ADDRESS", help="a running Dask scheduler (needs the sweep extra)")
     sweep.add_argument("--workers", type=int, metavar="N", help="local processes (default: all cores)")
-    sweep.add_argument("--resume", action="store_true", help="keep the records in RESULTS, evaluate the rest")
+    sweep.add_argument("--resume", action="store_true",
+                       help="keep the records in RESULTS (they must be of this spec), evaluate the rest")
+    sweep.add_argument("--max-points", type=int, default=None, metavar="N",
+                       help="refuse a spec with more points than N (default 1,000,000)")
     sweep.set_defaults(run=_run_sweep)
 
     generate = commands.add_parser("generate", help="generate an assembly and write it (format by suffix)")
@@ -200,7 +208,8 @@ def _output_arguments(parser) -> None:
 def _lattice_arguments(parser) -> None:
     parser.add_argument("--a", type=float, default=1.0, help="cell edge a (default 1)")
     parser.add_argument("--b", type=float, default=None, help="cell edge b (default: a)")
-    parser.add_argument("--gamma", type=float, default=None, help="cell angle in degrees (default: the crystal system's)")
+    parser.add_argument("--gamma", type=float, default=None,
+                        help="cell angle in degrees (default: the crystal system's)")
 
 
 def _group_record(g: wallpaper.WallpaperGroup) -> dict:
@@ -308,7 +317,8 @@ def _run_periodic(args) -> int:
     from interlock.verify import criterion_4_3, periodic_check
 
     if (args.group is None) == (args.staircase is None):
-        raise InterlockError("give either a wallpaper group (with --deform) or --staircase N0,N1,N2, not both or neither")
+        raise InterlockError("give either a wallpaper group (with --deform) or --staircase N0,N1,N2, "
+                             "not both or neither")
     criterion = None
     if args.staircase is not None:
         cell = rhomblock_assembly(staircase(_numbers(args.staircase, int, "--staircase")), args.variant)
@@ -352,7 +362,8 @@ def _run_stability(args) -> int:
         result = rbe(assembly, args.mu, density=args.density, cone=args.cone)
     tilt = None
     if args.tilt_axis is not None:
-        axis = args.tilt_axis if args.tilt_axis in ("x", "y", "xy30") else _numbers(args.tilt_axis, float, "--tilt-axis")
+        axis = (args.tilt_axis if args.tilt_axis in ("x", "y", "xy30")
+                else _numbers(args.tilt_axis, float, "--tilt-axis"))
         with tqdm(desc=f"tilt about {args.tilt_axis}", unit="angle", disable=None) as bar:
             def advance(angle, stable):
                 bar.set_postfix_str(f"{angle:.2f} deg {'stable' if stable else 'not stable'}")
@@ -365,7 +376,8 @@ def _run_stability(args) -> int:
         return 0
     print(result)
     if tilt is not None:
-        print(f"critical tilt about {args.tilt_axis}: " + ("stable up to 180 degrees" if tilt >= 180 else f"{tilt:.1f} degrees"))
+        angle = "stable up to 180 degrees" if tilt >= 180 else f"{tilt:.1f} degrees"
+        print(f"critical tilt about {args.tilt_axis}: {angle}")
     return 0
 
 
@@ -402,11 +414,15 @@ def _run_sweep(args) -> int:
 
     from tqdm import tqdm
 
-    from interlock.sweep import SweepError, load_spec, run
+    from interlock.sweep import MAX_POINTS, SweepError, SweepWarning, check_size, load_spec, run
 
     spec = load_spec(args.spec)
     if args.workers is not None and args.workers < 1:
         raise SweepError(f"--workers must be at least 1, got {args.workers}")
+    limit = MAX_POINTS if args.max_points is None else args.max_points
+    if limit < 1:
+        raise SweepError(f"--max-points must be at least 1, got {limit}")
+    total = check_size(spec, limit)
     client = None
     if args.scheduler:
         try:
@@ -418,12 +434,19 @@ def _run_sweep(args) -> int:
         except OSError as error:
             raise SweepError(f"no Dask scheduler at {args.scheduler}: {error}") from None
     try:
-        with tqdm(total=len(spec.points()), desc="sweep", unit="point", disable=None) as bar:
+        with tqdm(total=total, desc="sweep", unit="point", disable=None) as bar, \
+                warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", SweepWarning)
             records = run(spec, args.output, executor=client, workers=args.workers, resume=args.resume,
-                          progress=bar.update)
+                          progress=bar.update, max_points=limit)
     finally:
         if client is not None:
             client.close()
+    for warning in caught:  # a damaged record, skipped: one line each; other warnings as Python shows them
+        if issubclass(warning.category, SweepWarning):
+            print(f"interlock sweep: warning: {warning.message}", file=sys.stderr)
+        else:
+            warnings.showwarning(warning.message, warning.category, warning.filename, warning.lineno)
     counts = Counter(r["status"] for r in records)
     print(f"{len(records)} points ({', '.join(f'{n} {s}' for s, n in sorted(counts.items()))}): {args.output}")
     for verdict in spec.verdicts:
@@ -442,6 +465,11 @@ def _run_sweep(args) -> int:
                 print(f"  no map: {error}", file=sys.stderr)
                 break
             print(f"  map: {path}")
+    if records and not counts["ok"]:
+        first = records[0]
+        print(f"interlock sweep: no point succeeded; point {first['index']} is {first['status']}: {first['message']}",
+              file=sys.stderr)
+        return 1
     return 0
 
 

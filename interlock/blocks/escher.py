@@ -124,7 +124,8 @@ def escher_block(group: WallpaperGroup, deformation: Mapping, height: float = 1.
     ([0, 1, 2, 3], True, 0.25)
     """
     if not isinstance(group, WallpaperGroup):
-        raise DeformationError(f"group must be a WallpaperGroup (see interlock.wallpaper.group), got {type(group).__name__}")
+        raise DeformationError(f"group must be a WallpaperGroup (see interlock.wallpaper.group), "
+                               f"got {type(group).__name__}")
     height = _positive(height, "height")
     if not (isinstance(rtol, (int, float)) and math.isfinite(rtol) and rtol >= 0):
         raise DeformationError(f"rtol must be a finite number >= 0, got {rtol!r}")
@@ -151,17 +152,24 @@ def _equivariant_deformation(group, deformation, tol) -> dict[int, np.ndarray]:
     """Every edge's points, partners filled in through the side pairings."""
     if not isinstance(deformation, Mapping):
         raise DeformationError(
-            f"deformation must map edge indices to point lists, e.g. {{0: [(0.3, 0.1)]}}; got {type(deformation).__name__}"
+            f"deformation must map edge indices to point lists, e.g. {{0: [(0.3, 0.1)]}}; "
+            f"got {type(deformation).__name__}"
         )
     pairings = group.side_pairings()
     count = len(pairings)
     given = {}
     for key, points in deformation.items():
         if isinstance(key, (bool, np.bool_)) or not isinstance(key, (int, np.integer)) or not 0 <= key < count:
-            raise DeformationError(f"edge {key!r} does not exist: the fundamental domain of {group.name} has edges 0..{count - 1}")
-        pts = np.array(points, dtype=float) if len(points) else np.empty((0, 2))
+            raise DeformationError(f"edge {key!r} does not exist: the fundamental domain of {group.name} "
+                                   f"has edges 0..{count - 1}")
+        try:
+            pts = np.array(points, dtype=float) if len(points) else np.empty((0, 2))
+        except (TypeError, ValueError):  # strings, ragged lists, objects without a length
+            raise DeformationError(f"edge {key}: intermediate points must be a sequence of (x, y) number pairs, "
+                                   f"e.g. [(0.3, 0.1)]; got {points!r}") from None
         if pts.ndim != 2 or pts.shape[1] != 2:
-            raise DeformationError(f"edge {key}: intermediate points must be a sequence of (x, y) pairs, got shape {pts.shape}")
+            raise DeformationError(f"edge {key}: intermediate points must be a sequence of (x, y) pairs, "
+                                   f"got shape {pts.shape}")
         if not np.all(np.isfinite(pts)):
             raise DeformationError(f"edge {key}: intermediate points must be finite, got {pts.tolist()}")
         given[int(key)] = pts
@@ -226,7 +234,8 @@ def _top_ring(corners, full, tol, name) -> np.ndarray:
         raise DeformationError("the deformation makes F' fold back on itself (a path doubles back along a line); "
                                "move the intermediate points off the edges' extensions")
     if shapely.Polygon(ring).area <= 0 or not shapely.LinearRing(ring).is_ccw:
-        raise DeformationError("the deformed domain F' turned inside out; intermediate points must keep it counter-clockwise")
+        raise DeformationError("the deformed domain F' turned inside out; intermediate points must keep it "
+                               "counter-clockwise")
     return ring
 
 
@@ -274,7 +283,8 @@ def _slice_vertices(corners, full):
         nxt = corners[(e + 1) % count]
         pts = full[e]
         j = math.ceil(len(pts) / 2)
-        rows = [(corner, corner)] + [(corner, p) for p in pts[:j]] + ([(nxt, p) for p in pts[j - 1:]] if len(pts) else [])
+        rows = [(corner, corner)] + [(corner, p) for p in pts[:j]]
+        rows += [(nxt, p) for p in pts[j - 1:]] if len(pts) else []
         start += [a for a, _ in rows]
         end += [b for _, b in rows]
         owner += [e] * len(rows)

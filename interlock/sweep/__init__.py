@@ -12,7 +12,8 @@ draws a two-parameter sweep.
 """
 
 from interlock.sweep.record import deformation, evaluate
-from interlock.sweep.run import read_records, run
+from interlock.sweep.run import MAX_POINTS, SweepWarning, check_size, read_records, run
 from interlock.sweep.spec import VERDICTS, SweepError, SweepSpec, load_spec
 
-__all__ = ["SweepError", "SweepSpec", "VERDICTS", "load_spec", "run", "read_records", "evaluate", "deformation"]
+__all__ = ["SweepError", "SweepWarning", "SweepSpec", "VERDICTS", "MAX_POINTS", "load_spec", "run", "check_size",
+           "read_records", "evaluate", "deformation"]

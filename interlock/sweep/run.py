@@ -12,19 +12,36 @@ from __future__ import annotations
 
 import json
 import os
+import warnings
 from concurrent.futures import Executor, ProcessPoolExecutor, as_completed
 from pathlib import Path
 
+import interlock
+from interlock.files import atomic_write, write_atomically
 from interlock.sweep.record import evaluate_chunk
 from interlock.sweep.spec import SweepError, SweepSpec, load_spec
 
-__all__ = ["run", "read_records"]
+__all__ = ["run", "read_records", "check_size", "SweepWarning", "MAX_POINTS", "HEADER_KEY"]
 
 FORMATS = (".jsonl", ".parquet")
+#: The most points :func:`run` evaluates unless ``max_points`` says more: each point and its record take
+#: about :data:`BYTES_PER_POINT` in memory, and a point takes 10-100 ms.
+MAX_POINTS = 1_000_000
+#: Memory per point (the point, its record and its future), measured on p4 sweeps: about 1 KB.
+BYTES_PER_POINT = 1_000
+#: The key of the first line of a JSON lines output (and of ``sweep.json`` in a Parquet folder): the spec's
+#: name, :attr:`~interlock.sweep.spec.SweepSpec.fingerprint`, number of points and interlock's version.
+HEADER_KEY = "sweep"
+# The header of a Parquet output folder.
+_PARQUET_HEADER = "sweep.json"
+
+
+class SweepWarning(UserWarning):
+    """Something in a sweep's output that was skipped (a damaged record): the point is computed again."""
 
 
 def run(spec, output=None, executor=None, workers: int | None = None, resume: bool = False,
-        progress=None) -> list[dict]:
+        progress=None, max_points: int = MAX_POINTS) -> list[dict]:
     """Evaluate every point of ``spec``; return all records, sorted by ``index``.
 
     Parameters
@@ -32,16 +49,29 @@ def run(spec, output=None, executor=None, workers: int | None = None, resume: bo
     spec : SweepSpec, path or dict
         See :mod:`interlock.sweep.spec`.
     output : path, optional
-        ``*.jsonl`` or ``*.parquet``; records are written as each chunk finishes.  An existing
-        output needs ``resume=True``.
+        ``*.jsonl`` or ``*.parquet``; records are written as each chunk finishes, after a header with
+        the spec's :attr:`~interlock.sweep.spec.SweepSpec.fingerprint`.  An existing output needs
+        ``resume=True``.  The output is checked (its folder exists and is writable, it is not a folder)
+        before any point is computed.
     executor : concurrent.futures.Executor or dask.distributed.Client, optional
         Where chunks run; default: a process pool of ``workers`` processes (default all cores).
         A Dask client runs them on its cluster.
     resume : bool
-        Keep the records already in ``output`` and evaluate only the missing points.
+        Keep the records already in ``output`` and evaluate only the missing points.  The output must
+        be of the same spec: the same fingerprint, and every kept record at the parameters of the
+        spec's point of its index.  A damaged record is skipped with a :class:`SweepWarning` and its
+        point computed again.
     progress : callable, optional
         Called with the number of points finished by each chunk; when resuming, first with the number
         of points kept from ``output`` (so that a progress bar over all points reaches its total).
+    max_points : int
+        Refuse a spec with more points than this (default :data:`MAX_POINTS`), before making them.
+
+    Raises
+    ------
+    SweepError
+        A bad spec, too many points, an output that cannot be written, or one that holds another
+        spec's records.
 
     Examples
     --------
@@ -53,9 +83,13 @@ def run(spec, output=None, executor=None, workers: int | None = None, resume: bo
     ['fails', 'holds']
     """
     spec = spec if isinstance(spec, SweepSpec) else load_spec(spec)
-    writer = None if output is None else _writer(Path(output), spec, resume)
-    done = {} if writer is None else {r["index"]: r for r in writer.records}
-    todo = [(i, p) for i, p in enumerate(spec.points()) if i not in done]
+    check_size(spec, max_points)
+    points = spec.points()
+    writer = None if output is None else _writer(Path(output), resume)
+    done = {} if writer is None else _kept(writer, spec, points)
+    if writer is not None:
+        writer.start(spec)
+    todo = [(i, p) for i, p in enumerate(points) if i not in done]
     chunks = [todo[k:k + spec.chunk] for k in range(0, len(todo), spec.chunk)]
     if done and progress is not None:
         progress(len(done))
@@ -83,72 +117,193 @@ def run(spec, output=None, executor=None, workers: int | None = None, resume: bo
     return [done[i] for i in sorted(done)]
 
 
+def check_size(spec: SweepSpec, max_points: int = MAX_POINTS) -> int:
+    """The number of points of ``spec``; a :class:`SweepError` above ``max_points``, before any is made.
+
+    >>> from interlock.sweep.spec import load_spec
+    >>> huge = load_spec({"group": "p1", "parameters": {"s": {"range": [0, 1], "steps": 100000},
+    ...                   "t": {"range": [0, 1], "steps": 100000}}})
+    >>> check_size(huge)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    interlock.sweep.spec.SweepError: the spec has 10,000,000,000 points (about 10 TB in memory), more than ...
+    """
+    if isinstance(max_points, bool) or not isinstance(max_points, int) or max_points < 1:
+        raise SweepError(f"max_points must be an integer >= 1, got {max_points!r}")
+    size = spec.size
+    if size > max_points:
+        raise SweepError(f"the spec has {size:,} points (about {_bytes(size * BYTES_PER_POINT)} in memory), more than "
+                         f"the limit {max_points:,}; use fewer steps or samples, or raise the limit (--max-points)")
+    return size
+
+
 def read_records(path) -> list[dict]:
-    """The records of a sweep's output (``*.jsonl`` or ``*.parquet``), sorted by ``index``."""
+    """The records of a sweep's output (``*.jsonl`` or ``*.parquet``), sorted by ``index``.
+
+    The header is left out; a damaged record is skipped with a :class:`SweepWarning`.
+    """
     path = Path(path)
     if not path.exists():
         raise SweepError(f"no sweep output at {path}")
-    records = _JsonLines.read(path) if path.suffix == ".jsonl" else _Parquet.read(path)
+    records = (_JsonLines if path.suffix == ".jsonl" else _Parquet).read(path)[1]
     return sorted(records, key=lambda r: r["index"])
 
 
-def _writer(path: Path, spec: SweepSpec, resume: bool):
+def _bytes(count: float) -> str:
+    for unit in ("B", "KB", "MB", "GB", "TB"):
+        if count < 1000 or unit == "TB":
+            return f"{count:.0f} {unit}"
+        count /= 1000
+
+
+def _writer(path: Path, resume: bool):
+    """The output's writer, after checking that it can be written: before any point is computed."""
     if path.suffix not in FORMATS:
         raise SweepError(f"the output must end in {' or '.join(FORMATS)}, got {path.name}")
+    folder = path.parent
+    if not folder.is_dir():
+        raise SweepError(f"cannot write {path}: the folder {folder} "
+                         f"{'is a file' if folder.exists() else 'does not exist; create it first'}")
+    if not os.access(folder, os.W_OK):
+        raise SweepError(f"cannot write {path}: the folder {folder} is not writable")
+    if path.suffix == ".jsonl" and path.is_dir():
+        raise SweepError(f"cannot write {path}: it is a folder; give a file name ending in .jsonl")
+    if path.suffix == ".parquet" and path.exists() and not path.is_dir():
+        raise SweepError(f"cannot write {path}: a Parquet output is a folder, and this is a file")
     if path.exists() and not resume:
         raise SweepError(f"{path} exists: resume it (--resume) or choose another output")
-    return (_JsonLines if path.suffix == ".jsonl" else _Parquet)(path, spec)
+    try:
+        return (_JsonLines if path.suffix == ".jsonl" else _Parquet)(path)
+    except PermissionError as error:
+        raise SweepError(f"cannot write {path}: {error.strerror or error}") from None
+
+
+def _header(spec: SweepSpec) -> dict:
+    return {HEADER_KEY: {"name": spec.name, "fingerprint": spec.fingerprint, "points": spec.size,
+                         "interlock": interlock.__version__}}
+
+
+def _kept(writer, spec: SweepSpec, points: list[dict]) -> dict:
+    """The records of an output that is resumed, after checking that they are this spec's."""
+    header = writer.header
+    if writer.records or header is not None:
+        stored = (header or {}).get(HEADER_KEY, {})
+        if stored.get("fingerprint") != spec.fingerprint:
+            what = (f"the records of another spec ({stored.get('name', '?')}, fingerprint {stored.get('fingerprint')})"
+                    if stored else "records without a spec fingerprint (an older interlock, or not a sweep)")
+            raise SweepError(f"{writer.path} holds {what}, not of {spec.name} (fingerprint {spec.fingerprint}); "
+                             "choose another output")
+    for record in writer.records:
+        index = record["index"]
+        if not (isinstance(index, int) and 0 <= index < len(points)) or record.get("parameters") != points[index]:
+            raise SweepError(f"{writer.path} holds a record for point {index} at {record.get('parameters')}, but "
+                             f"the spec's point {index} is {points[index] if 0 <= index < len(points) else 'none'}: "
+                             "the output belongs to another spec; choose another output")
+    return {r["index"]: r for r in writer.records}
+
+
+def _record(line: str, where: str) -> dict | None:
+    """One record of a JSON line; None (with a :class:`SweepWarning`) if it is damaged."""
+    try:
+        record = json.loads(line)
+        if isinstance(record, dict) and isinstance(record.get("index"), int) and "status" in record:
+            return record
+    except json.JSONDecodeError:
+        pass
+    warnings.warn(f"{where} is not a sweep record; skipped, its point is computed again", SweepWarning,
+                  stacklevel=3)
+    return None
 
 
 class _JsonLines:
-    """One JSON object per line, appended and flushed per chunk.  A line cut short by a killed run is dropped."""
+    """A header line, then one JSON object per record, appended and flushed per chunk.
 
-    def __init__(self, path: Path, spec: SweepSpec):
+    A line cut short by a killed run, or damaged otherwise, is dropped (with a :class:`SweepWarning`)
+    when the output is resumed: the file is rewritten whole without it, and its point is computed again.
+    """
+
+    def __init__(self, path: Path):
         self.path = path
-        self.records = []
-        if path.exists():  # keep the whole lines, cut a partial last one before appending
-            whole = path.read_bytes()
-            whole = whole[:whole.rfind(b"\n") + 1]
-            path.write_bytes(whole)
-            self.records = [json.loads(line) for line in whole.decode().splitlines()]
+        self.header, self.records = self.read(path) if path.exists() else (None, [])
+
+    def start(self, spec: SweepSpec) -> None:
+        """Write the header and the kept records, whole, before new records are appended."""
+        lines = [self.header or _header(spec)] + self.records
+        write_atomically(self.path, "".join(json.dumps(r, default=float) + "\n" for r in lines))
 
     @staticmethod
-    def read(path: Path) -> list[dict]:
-        return [json.loads(line) for line in path.read_text().splitlines(keepends=True) if line.endswith("\n")]
+    def read(path: Path) -> tuple[dict | None, list[dict]]:
+        try:
+            lines = path.read_text(encoding="utf-8", errors="replace").splitlines(keepends=True)
+        except OSError as error:
+            raise SweepError(f"cannot read {path}: {error.strerror or error}") from None
+        header = None
+        if lines and lines[0].startswith(f'{{"{HEADER_KEY}"'):
+            try:
+                header = json.loads(lines.pop(0))
+            except json.JSONDecodeError:
+                header = {}
+        if lines and not lines[-1].endswith("\n"):  # cut short by a killed run
+            lines.pop()
+        records = [_record(line, f"{path} line {k + 1 + (header is not None)}") for k, line in enumerate(lines)
+                   if line.strip()]
+        return header, [r for r in records if r is not None]
 
     def write(self, records: list[dict]) -> None:
-        with self.path.open("a") as stream:
+        with self.path.open("a", encoding="utf-8") as stream:
             stream.writelines(json.dumps(r, default=float) + "\n" for r in records)
             stream.flush()
             os.fsync(stream.fileno())
 
 
 class _Parquet:
-    """A folder of ``part-<first index>.parquet`` files, one per chunk, each renamed into place when complete."""
+    """A folder of ``part-<first index>.parquet`` files, one per chunk, each renamed into place when complete.
 
-    def __init__(self, path: Path, spec: SweepSpec):
+    ``sweep.json`` holds the header.  A part that cannot be read is renamed ``*.damaged`` (with a
+    :class:`SweepWarning`) when the output is resumed, and its points are computed again.
+    """
+
+    def __init__(self, path: Path):
         self.pa, self.pq = _pyarrow()
         self.path = path
-        self.records = self.read(path) if path.exists() else []
-        path.mkdir(parents=True, exist_ok=True)
+        self.damaged = []
+        self.header, self.records = self.read(path, self.damaged) if path.exists() else (None, [])
+
+    def start(self, spec: SweepSpec) -> None:
+        """Write the header (a new output) and set damaged parts aside."""
+        self.path.mkdir(exist_ok=True)
+        for part in self.damaged:
+            os.replace(part, part.with_name(part.name + ".damaged"))
+        if self.header is None:
+            write_atomically(self.path / _PARQUET_HEADER, json.dumps(_header(spec)))
 
     @staticmethod
-    def read(path: Path) -> list[dict]:
+    def read(path: Path, damaged: list | None = None) -> tuple[dict | None, list[dict]]:
         _, pq = _pyarrow()
+        header_path = path / _PARQUET_HEADER
+        try:
+            header = json.loads(header_path.read_text()) if header_path.is_file() else None
+        except (OSError, ValueError):
+            header = {}
         records = []
         for part in sorted(path.glob("part-*.parquet")):
-            for row in pq.read_table(part).to_pylist():
-                records.append({**row, **{key: json.loads(row[key]) for key in ("parameters", "verdicts",
-                                                                                 "tolerances")}})
-        return records
+            try:
+                rows = pq.read_table(part).to_pylist()
+                records += [{**row, **{key: json.loads(row[key]) for key in ("parameters", "verdicts", "tolerances")}}
+                            for row in rows]
+            except Exception as error:  # pyarrow raises several types for a damaged file
+                warnings.warn(f"{part} cannot be read ({type(error).__name__}); skipped, its points are computed "
+                              "again", SweepWarning, stacklevel=3)
+                if damaged is not None:
+                    damaged.append(part)
+        return header, records
 
     def write(self, records: list[dict]) -> None:
         rows = [{**r, **{key: json.dumps(r[key], default=float) for key in ("parameters", "verdicts", "tolerances")}}
                 for r in records]
         name = f"part-{min(r['index'] for r in records):08d}.parquet"
-        partial = self.path / f".{name}.partial"
-        self.pq.write_table(self.pa.Table.from_pylist(rows), partial)
-        os.replace(partial, self.path / name)
+        with atomic_write(self.path / name) as temporary:
+            self.pq.write_table(self.pa.Table.from_pylist(rows), temporary)
 
 
 def _pyarrow():

@@ -35,11 +35,18 @@ unless ``samples = N`` asks for N points drawn uniformly from the ranges
 Top-level options: ``height`` (1.0), ``patch_radius`` (1.5 cells, for the
 "patch" and "stability" verdicts of Escher blocks), ``mu`` (0.5, for
 "stability"), ``chunk`` (points per task, 8).
+
+Every value is checked when the spec is read, before any point is
+computed: an edge the group's fundamental domain does not have, a height or
+a friction coefficient out of range, a tiling size that is not a whole
+number >= 0 (also among a parameter's values) is a :class:`SweepError`.
 """
 
 from __future__ import annotations
 
+import hashlib
 import itertools
+import json
 import math
 import sys
 from dataclasses import dataclass, field
@@ -54,7 +61,7 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover - Python 3.10
     import tomli as tomllib
 
-__all__ = ["SweepError", "SweepSpec", "Parameter", "load_spec", "VERDICTS"]
+__all__ = ["SweepError", "SweepSpec", "Parameter", "load_spec", "VERDICTS", "MAX_STEPS"]
 
 #: The verdicts a sweep can compute, and what they call.
 VERDICTS = {
@@ -70,6 +77,9 @@ TILING_KEYS = {"kind", "a", "b", "c", "seed", "variant"}
 POINT_KEYS = {"edge", "along", "offset"}
 TOP_KEYS = {"group", "tiling", "verdicts", "parameters", "points", "samples", "seed", "height", "patch_radius",
             "mu", "chunk", "name"}
+#: The most values one parameter's range may be cut into (``steps``): ten million floats are 80 MB; the
+#: number of points of the whole sweep is bounded when it runs (``interlock.sweep.run.MAX_POINTS``).
+MAX_STEPS = 10_000_000
 
 
 class SweepError(InterlockError):
@@ -110,6 +120,29 @@ class SweepSpec:
     name: str = "sweep"
     source: dict = field(default_factory=dict, repr=False, compare=False)
 
+    @property
+    def size(self) -> int:
+        """The number of points, computed without making them.
+
+        >>> load_spec({"group": "p1", "parameters": {"s": {"range": [0, 1], "steps": 100000},
+        ...            "t": {"range": [0, 1], "steps": 100000}}}).size
+        10000000000
+        """
+        return self.samples or math.prod(len(p.values) for p in self.parameters)
+
+    @property
+    def fingerprint(self) -> str:
+        """What a record of this spec means: the family, the verdicts and the options that change them.
+
+        A hash (SHA-256, 16 hex digits) of the family, the parameters' names, the
+        verdicts, ``patch_radius`` and ``mu``; not of the points themselves
+        (a grid may be extended and resumed), which :func:`~interlock.sweep.run`
+        compares record by record, nor of ``chunk`` and ``name``.
+        """
+        meaning = {"family": self.family, "parameters": [p.name for p in self.parameters],
+                   "verdicts": list(self.verdicts), "patch_radius": self.patch_radius, "mu": self.mu}
+        return hashlib.sha256(json.dumps(meaning, sort_keys=True).encode()).hexdigest()[:16]
+
     def points(self) -> list[dict]:
         """Every point of the sweep, in order: ``{name: value}`` per point (deterministic for a seed)."""
         names = [p.name for p in self.parameters]
@@ -117,7 +150,8 @@ class SweepSpec:
             rng = np.random.default_rng(self.seed)
             columns = [p.sample(rng, self.samples) for p in self.parameters]
             return [{n: float(c[i]) for n, c in zip(names, columns)} for i in range(self.samples)]
-        return [dict(zip(names, map(float, combo))) for combo in itertools.product(*(p.values for p in self.parameters))]
+        grid = itertools.product(*(p.values for p in self.parameters))
+        return [dict(zip(names, map(float, combo))) for combo in grid]
 
     def theory(self, x: str, y: str) -> list[dict]:
         """Overlay lines for a map over parameters ``x`` and ``y``: where a swept ``offset`` is 0 the
@@ -144,9 +178,15 @@ def load_spec(source) -> SweepSpec:
     if isinstance(source, (str, Path)):
         path = Path(source)
         try:
-            data = tomllib.loads(path.read_text())
+            data = tomllib.loads(path.read_text(encoding="utf-8"))
         except FileNotFoundError:
             raise SweepError(f"no sweep spec at {path}") from None
+        except IsADirectoryError:
+            raise SweepError(f"{path} is a folder; give the sweep spec, a TOML file") from None
+        except UnicodeDecodeError:
+            raise SweepError(f"{path} is not a text file; give the sweep spec, a TOML file") from None
+        except OSError as error:
+            raise SweepError(f"cannot read the sweep spec {path}: {error.strerror or error}") from None
         except tomllib.TOMLDecodeError as error:
             raise SweepError(f"{path} is not valid TOML: {error}") from None
     elif isinstance(source, dict):
@@ -166,10 +206,49 @@ def load_spec(source) -> SweepSpec:
     samples = _integer(data.get("samples", 0), "samples", 0)
     if not samples and any(p.low is not None and len(p.values) == 0 for p in parameters):
         raise SweepError("a range without steps can only be sampled: give steps, or samples = N")
+    mu = _number(data.get("mu", 0.5), "mu")
+    if mu < 0:
+        raise SweepError(f"mu, the friction coefficient, must be >= 0, got {mu}")
+    _check_values(family, {p.name: p for p in parameters}, samples)
     return SweepSpec(family, parameters, tuple(verdicts), samples, _integer(data.get("seed", 0), "seed", 0),
                      _number(data.get("patch_radius", 1.5), "patch_radius", positive=True),
-                     _number(data.get("mu", 0.5), "mu"), _integer(data.get("chunk", 8), "chunk", 1),
+                     mu, _integer(data.get("chunk", 8), "chunk", 1),
                      str(data.get("name", Path(source).stem if isinstance(source, (str, Path)) else "sweep")), data)
+
+
+def _check_values(family: dict, parameters: dict, samples: int) -> None:
+    """Every value a point can take is allowed where it is used: a bad spec fails before any point is computed.
+
+    Heights are > 0; tiling sizes and seeds whole numbers >= 0 and the variant 0 or 1, also every value
+    of a parameter used there (a sampled range gives no whole numbers: use ``values``).
+    """
+    if "group" in family:
+        _check_place(family["height"], "height", parameters, samples, lambda v: v > 0, "a number > 0")
+        return
+    for key in ("a", "b", "c", "seed", "variant"):
+        allowed = (lambda v: v in (0, 1)) if key == "variant" else (lambda v: v >= 0 and float(v).is_integer())
+        meaning = "0 or 1" if key == "variant" else "a whole number >= 0"
+        _check_place(family["tiling"][key], f"tiling.{key}", parameters, samples, allowed, meaning,
+                     whole=True)
+
+
+def _check_place(value, what: str, parameters: dict, samples: int, allowed, meaning: str, whole=False) -> None:
+    """Check a fixed value, or every value of the parameter named ``value``, against ``allowed``."""
+    if not isinstance(value, str):
+        if not allowed(value):
+            raise SweepError(f"{what} must be {meaning}, got {value:g}")
+        return
+    parameter = parameters[value]
+    if samples and parameter.low is not None:
+        if whole:
+            raise SweepError(f"{what} takes whole numbers, but parameter {value!r} is sampled from a range; "
+                             "give it values = [...]")
+        values = (parameter.low, parameter.high)
+    else:
+        values = parameter.values
+    bad = [v for v in values if not allowed(v)]
+    if bad:
+        raise SweepError(f"{what} must be {meaning}, but parameter {value!r} takes {bad[0]:g}")
 
 
 def _family(data: dict, names: set) -> dict:
@@ -197,6 +276,10 @@ def _family(data: dict, names: set) -> dict:
     for k, point in enumerate(points):
         if not isinstance(point, dict) or set(point) != POINT_KEYS:
             raise SweepError(f"points[{k}] needs exactly the keys {sorted(POINT_KEYS)}, got {point!r}")
+        edges = len(wallpaper.group(group).side_pairings())
+        if not (isinstance(point["edge"], int) and 0 <= point["edge"] < edges):
+            raise SweepError(f"points[{k}].edge must be an edge of {group}'s fundamental domain, 0..{edges - 1}, "
+                             f"got {point['edge']!r}")
         parsed.append({"edge": _integer(point["edge"], f"points[{k}].edge", 0),
                        "along": _value(point["along"], f"points[{k}].along", names),
                        "offset": _value(point["offset"], f"points[{k}].offset", names)})
@@ -220,8 +303,9 @@ def _parameter(name: str, value) -> Parameter:
         if not low < high:
             raise SweepError(f"parameter {name!r}: range needs low < high, got [{low}, {high}]")
         steps = _integer(value.get("steps", 0), f"parameter {name!r} steps", 0)
-        if steps == 1:
-            raise SweepError(f"parameter {name!r}: steps must be 0 (sampled only) or >= 2")
+        if steps == 1 or steps > MAX_STEPS:
+            raise SweepError(f"parameter {name!r}: steps must be 0 (sampled only) or 2..{MAX_STEPS:,}, "
+                             f"got {steps:,}")
         grid = tuple(float(f"{v:.12g}") for v in np.linspace(low, high, steps))  # 0.3, not 0.29999999999999993
         return Parameter(name, grid, low, high)
     raise SweepError(f"parameter {name!r} must be {{range = [low, high], steps = n}} or {{values = [...]}}, "

@@ -2,6 +2,7 @@
 
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -12,7 +13,7 @@ import pytest
 
 from interlock import InterlockError
 from interlock.cli import main
-from interlock.sweep import SweepError, deformation, evaluate, load_spec, read_records, run
+from interlock.sweep import SweepError, SweepWarning, deformation, evaluate, load_spec, read_records, run
 
 #: p4, one point on edge 0: Criterion 4.3 fails (g_0 generates a finite rotation group), |offset| >= 1 makes F'
 #: self-intersect (measured), and at offset 0 the point is on its edge.
@@ -157,7 +158,7 @@ def test_resume_after_a_killed_run_repeats_no_finished_point(tmp_path):
                                 "--workers", "1"], start_new_session=True, stdout=subprocess.DEVNULL,
                                stderr=subprocess.DEVNULL)
     deadline = time.monotonic() + 120
-    while time.monotonic() < deadline and (not out.exists() or out.read_text().count("\n") < 3):
+    while time.monotonic() < deadline and (not out.exists() or out.read_text().count("\n") < 4):  # header + 3
         time.sleep(0.05)
     os.killpg(process.pid, signal.SIGKILL)
     process.wait()
@@ -169,8 +170,9 @@ def test_resume_after_a_killed_run_repeats_no_finished_point(tmp_path):
     assert [r["index"] for r in after] == list(range(35))
     kept = {r["index"]: r for r in after}
     assert all(kept[r["index"]] == r for r in before)  # same seconds too: not evaluated again
-    lines = [json.loads(line)["index"] for line in out.read_text().splitlines()]
-    assert sorted(lines) == list(range(35))  # every point once in the file
+    header, *lines = [json.loads(line) for line in out.read_text().splitlines()]
+    assert header["sweep"]["fingerprint"] == load_spec(spec_path).fingerprint
+    assert sorted(line["index"] for line in lines) == list(range(35))  # every point once in the file
 
 
 def _toml(spec: dict) -> str:
@@ -205,8 +207,14 @@ def test_bad_specs_raise_sweep_error(change, message):
     assert isinstance(caught.value, InterlockError) and isinstance(caught.value, ValueError)
 
 
-def test_a_missing_edge_is_an_invalid_point_not_a_crash():
-    spec = load_spec({**P1, "points": [{"edge": 9, "along": 0.5, "offset": "s"}]})
+def test_a_missing_edge_is_refused_before_any_point_is_computed():
+    with pytest.raises(SweepError, match=r"points\[0\].edge must be an edge of p1's fundamental domain, 0..3, got 9"):
+        load_spec({**P1, "points": [{"edge": 9, "along": 0.5, "offset": "s"}]})
+
+
+def test_a_missing_edge_at_one_point_is_an_invalid_point_not_a_crash():
+    spec = load_spec(P1)
+    spec.family["points"][0]["edge"] = 9  # past the check of load_spec
     record = evaluate(spec, 0, {"s": 0.1, "u": 0.0})
     assert record["status"] == "invalid" and "edge 9 does not exist" in record["message"]
 
@@ -249,3 +257,134 @@ def test_the_example_specs_say_what_their_comments_claim():
     p4 = run(folder / "p4-edge0.toml", workers=2)
     assert {r["status"] == "invalid" for r in p4 if abs(r["parameters"]["s"]) >= 1.0} == {True}
     assert {tuple(r["verdicts"].values()) for r in p4 if r["status"] == "ok"} == {("not interlocked", "fails")}
+
+
+# --- safe outputs (issue 22) ------------------------------------------------------------------------------
+
+SMALL = {**P1, "verdicts": ["criterion_4_3"], "parameters": {"s": {"values": [-0.2, 0.2]}, "u": {"values": [0.15]}}}
+
+
+@pytest.mark.parametrize("change, message", [
+    ({"mu": -0.5}, "mu, the friction coefficient, must be >= 0, got -0.5"),
+    ({"points": [{"edge": 42, "along": 0.5, "offset": "s"}]}, "must be an edge of p1's"),
+    ({"height": "s"}, "height must be a number > 0, but parameter 's' takes -0.2"),
+    ({"height": 0}, "height must be a number > 0, got 0"),
+    ({"parameters": {"s": {"range": [0, 1], "steps": 10**11}, "u": {"values": [0.0]}}}, "steps must be 0"),
+])
+def test_bad_values_are_refused_before_any_point_is_computed(change, message):
+    with pytest.raises(SweepError, match=re.escape(message)):
+        load_spec({**P1, **change})
+
+
+@pytest.mark.parametrize("tiling, message", [
+    ({"a": 1.5}, "tiling.a must be a whole number >= 0, got 1.5"),
+    ({"c": "c"}, "tiling.c must be a whole number >= 0, but parameter 'c' takes -1"),
+    ({"variant": 2}, "tiling.variant must be 0 or 1, got 2"),
+])
+def test_bad_tiling_values_are_refused_before_any_point_is_computed(tiling, message):
+    spec = {"tiling": {"kind": "hexagon", **tiling}, "parameters": {"c": {"values": [-1, 2]}}}
+    with pytest.raises(SweepError, match=re.escape(message)):
+        load_spec(spec)
+
+
+def test_a_spec_of_ten_billion_points_is_refused_before_they_are_made(tmp_path):
+    huge = {**P1, "parameters": {"s": {"range": [0, 1], "steps": 100_000}, "u": {"range": [0, 1], "steps": 100_000}}}
+    assert load_spec(huge).size == 10**10
+    with pytest.raises(SweepError, match="10,000,000,000 points .* more than the limit 1,000,000"):
+        run(huge, tmp_path / "x.jsonl")
+    assert not (tmp_path / "x.jsonl").exists()
+
+
+def test_a_spec_of_another_sweep_does_not_resume_its_results(tmp_path):
+    out = tmp_path / "b.jsonl"
+    _threads(SMALL, output=out)
+    other = {**SMALL, "points": [{"edge": 0, "along": 0.3, "offset": "s"}, {"edge": 1, "along": 0.4, "offset": "u"}]}
+    before = out.read_bytes()
+    with pytest.raises(SweepError, match="holds the records of another spec"):
+        _threads(other, output=out, resume=True)
+    assert out.read_bytes() == before  # untouched
+
+
+def test_records_at_other_parameters_are_not_taken_as_this_specs(tmp_path):
+    out = tmp_path / "b.jsonl"
+    _threads(SMALL, output=out)
+    shifted = {**SMALL, "parameters": {"s": {"values": [-0.3, 0.2]}, "u": {"values": [0.15]}}}
+    with pytest.raises(SweepError, match="holds a record for point 0 at"):
+        _threads(shifted, output=out, resume=True)
+
+
+def test_results_without_a_fingerprint_are_not_resumed(tmp_path):
+    out = tmp_path / "old.jsonl"
+    records = _threads(SMALL)
+    out.write_text("".join(json.dumps(r) + "\n" for r in records))
+    with pytest.raises(SweepError, match="without a spec fingerprint"):
+        _threads(SMALL, output=out, resume=True)
+
+
+def test_a_damaged_line_is_skipped_with_a_warning_and_its_point_computed_again(tmp_path):
+    out = tmp_path / "p1.jsonl"
+    first = _threads(SMALL, output=out)
+    header, one, two = out.read_text().splitlines(keepends=True)
+    out.write_text(header + '{"index": 0, "param' + "\n" + two)
+    with pytest.warns(SweepWarning, match="line 2 is not a sweep record"):
+        again = _threads(SMALL, output=out, resume=True)
+    assert _without_time(again) == _without_time(first)
+    assert [json.loads(line).get("index") for line in out.read_text().splitlines()] == [None, 1, 0]
+
+
+def test_cli_resume_with_a_damaged_line_warns_in_one_line_and_finishes(tmp_path, capsys):
+    spec, out = tmp_path / "p1.toml", tmp_path / "p1.jsonl"
+    spec.write_text(_toml({**P1, "verdicts": ["criterion_4_3"],
+                           "parameters": {"s": {"range": [-0.2, 0.2], "steps": 2}, "u": {"range": [0.1, 0.2],
+                                                                                         "steps": 2}}}))
+    assert main(["sweep", str(spec), "-o", str(out), "--workers", "1"]) == 0
+    lines = out.read_text().splitlines(keepends=True)
+    out.write_text(lines[0] + "garbage\n" + "".join(lines[2:]))
+    capsys.readouterr()
+    assert main(["sweep", str(spec), "-o", str(out), "--workers", "1", "--resume"]) == 0
+    err = capsys.readouterr().err
+    assert "interlock sweep: warning:" in err and "line 2 is not a sweep record" in err and "Traceback" not in err
+    assert len(read_records(out)) == 4
+
+
+@pytest.mark.parametrize("output, message", [
+    ("missing/x.jsonl", "does not exist; create it first"),
+    ("folder.jsonl", "it is a folder"),
+    ("readonly/x.jsonl", "is not writable"),
+])
+def test_an_output_that_cannot_be_written_is_refused_before_computing(tmp_path, monkeypatch, output, message):
+    (tmp_path / "folder.jsonl").mkdir()
+    (tmp_path / "readonly").mkdir()
+    if output.startswith("readonly"):
+        monkeypatch.setattr(os, "access", lambda path, mode: False)  # root may write anywhere
+    calls = []
+    import importlib
+
+    monkeypatch.setattr(importlib.import_module("interlock.sweep.run"), "evaluate_chunk",
+                        lambda *a: calls.append(a) or [])
+    with pytest.raises(SweepError, match=message):
+        run(SMALL, tmp_path / output, executor=ThreadPoolExecutor(1))
+    assert calls == []
+
+
+def test_a_folder_as_spec_is_a_sweep_error(tmp_path):
+    with pytest.raises(SweepError, match="is a folder; give the sweep spec"):
+        load_spec(tmp_path)
+
+
+def test_cli_exits_non_zero_when_no_point_succeeds(tmp_path, capsys):
+    spec = tmp_path / "bad.toml"
+    grid = {"t": {"range": [0.2, 0.8], "steps": 2}, "s": {"range": [1.5, 2.0], "steps": 2}}  # F' self-intersects
+    spec.write_text(_toml({**P4, "verdicts": ["criterion_4_3"], "parameters": grid}))
+    assert main(["sweep", str(spec), "-o", str(tmp_path / "x.jsonl"), "--workers", "1"]) == 1
+    err = capsys.readouterr().err
+    assert "no point succeeded" in err and "invalid" in err
+
+
+def test_cli_max_points_refuses_and_raises_the_limit(tmp_path, capsys):
+    spec = tmp_path / "p1.toml"
+    grid = {"s": {"range": [-0.2, 0.2], "steps": 3}, "u": {"range": [0.1, 0.2], "steps": 2}}
+    spec.write_text(_toml({**P1, "verdicts": ["criterion_4_3"], "parameters": grid}))
+    assert main(["sweep", str(spec), "-o", str(tmp_path / "x.jsonl"), "--max-points", "5"]) == 2
+    assert "6 points" in capsys.readouterr().err
+    assert main(["sweep", str(spec), "-o", str(tmp_path / "x.jsonl"), "--max-points", "6", "--workers", "1"]) == 0
