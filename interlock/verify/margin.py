@@ -134,18 +134,20 @@ def input_precision(vertices) -> tuple[float, str]:
     return top * 2.0**-53, "float64"
 
 
-def row_tolerances(matrix, contacts, tolerance: float) -> np.ndarray:
+def row_tolerances(matrix, contacts, tolerance) -> np.ndarray:
     """``eps_r = (t / L) (1 + 2 L / h_r)`` per row of an :class:`~interlock.verify.matrix.InterlockingMatrix`.
 
     ``h_r`` is the square root of the area of the row's contact polygon (for a
     point or line contact, the model size): the facet that carries the
     normal is at least that large, so rounding by ``t`` tilts it by at most
-    about ``t / h_r``.
+    about ``t / h_r``.  ``tolerance`` is one length ``t``, or one per contact.
     """
     L = matrix.length_scale
     areas = np.array([c.area for c in contacts], dtype=float)
     sizes = np.where(areas > 0, np.sqrt(np.maximum(areas, 0.0)), L)
-    return (tolerance / L) * (1.0 + 2.0 * L / sizes[matrix.row_contact])
+    t = np.asarray(tolerance, dtype=float)
+    t = t[matrix.row_contact] if t.ndim else t
+    return (t / L) * (1.0 + 2.0 * L / sizes[matrix.row_contact])
 
 
 def margin_lower_bound(A: sp.csr_matrix, eps: np.ndarray, stress, chunk: int = MARGIN_CHUNK) -> float:

@@ -65,6 +65,13 @@ class InterlockingMatrix:
             return np.hstack([np.zeros_like(x), x * self.length_scale])
         return np.hstack([x[:, :3], x[:, 3:] * self.length_scale])
 
+    def columns(self, twists) -> np.ndarray:
+        """The column vector of world-unit twists ``(omega, t)`` of the free blocks, shape (k, 6): :meth:`twists` inverted."""
+        twists = np.asarray(twists, dtype=float).reshape(len(self.free), 6)
+        if self.translational:
+            return (twists[:, 3:] / self.length_scale).ravel()
+        return np.hstack([twists[:, :3], twists[:, 3:] / self.length_scale]).ravel()
+
 
 def interlocking_matrix(assembly: Assembly, frame=None, translational: bool = False,
                         contacts=None) -> InterlockingMatrix:

@@ -91,6 +91,16 @@ def test_bunny_with_vertex_noise_of_1e_7(bunny, frame, allowed):
     assert verdict.interlocked in allowed and "faces bent by up to" in verdict.tolerances["tolerance_from"]
 
 
+@pytest.mark.parametrize("amplitude", [1e-12, 1e-9, 1e-7])
+@pytest.mark.parametrize("certify", [False, True])
+def test_contacts_tighter_than_the_noise_give_no_wrong_verdict(bunny, amplitude, certify):
+    """Contacts found below the input's noise miss touching faces: frame {0, 1} is then never "not interlocked"."""
+    noisy = _noisy(bunny, amplitude, seed=2)
+    verdict = check(noisy, frame=[0, 1], contacts=contacts(noisy, 1e-12, 1e-12), certify=certify)
+    assert verdict.interlocked is not False and not verdict.certified
+    assert verdict.interlocked is True or "the given contacts lack" in verdict.status
+
+
 def test_a_given_tolerance_is_used_and_reported(bunny):
     verdict = check(bunny, frame=[0, 1], tolerance=1e-3 * bunny.scale)
     assert verdict.tolerances["tolerance_from"] == "given" and verdict.interlocked is not True

@@ -228,5 +228,6 @@ def test_a_sliding_motion_the_exact_matrix_does_not_have_is_not_certified():
                    frame="boundary")
     tight = find(finite, rtol=1e-12, angle_tol=1e-12)  # contacts that keep the bend: the slide is rounding only
     v = check(finite, translational=True, contacts=tight, certify=True)
-    assert v.interlocked is False and v.motion_kind == "sliding"  # rank_rtol 1e-9 calls the bend's value zero
-    assert not v.certified and "exact matrix has full column rank" in v.status
+    # rank_rtol 1e-9 calls the bend's value zero, but the slide crosses a face the default contacts see bent
+    assert v.interlocked is None and v.motion_kind == "sliding"
+    assert not v.certified and "planar only within the contact tolerances" in v.status

@@ -1,0 +1,161 @@
+"""Whether a first-order motion of the contact model also moves the real blocks: bent faces and missed contacts.
+
+:func:`~interlock.verify.check.check` finds its motions on a set of
+:class:`~interlock.blocks.contact.Contact` polygons.  Two things can make
+such a motion a property of the model and not of the blocks:
+
+- a contact whose facets the tolerances merged from triangles bent by a
+  small angle stands for several planes; a motion that slides along it may
+  be blocked by the real bend (:func:`unless_bent`);
+- contacts given by the caller, found with tolerances below the input's
+  noise, miss faces that really touch; a motion that pushes into one of them
+  is no motion at all (:func:`unless_missed`).
+
+Either way the verdict becomes inconclusive (``interlocked`` None) and says
+why (docs/interlocking.md, "Margin and tolerance").
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import scipy.linalg
+import scipy.sparse as sp
+
+from interlock.verify.margin import BEND_FACTOR, row_tolerances
+from interlock.verify.matrix import InterlockingMatrix, interlocking_matrix
+
+__all__ = ["moving_names", "rigid_across_bends", "unless_bent", "unless_missed", "bent_contacts", "MOVING_RTOL"]
+
+#: Blocks whose twist is below this fraction of the largest one do not move.
+MOVING_RTOL = 1e-6
+
+
+def moving_names(blocks) -> str:
+    """'block 4 has' / 'blocks 0, 1 and 2 have' (at most 8 listed).
+
+    >>> moving_names([4]), moving_names(range(10))
+    ('block 4 has', 'blocks 0, 1, 2, 3, 4, 5, 6, 7 and 2 more have')
+    """
+    blocks = list(blocks)
+    if len(blocks) == 1:
+        return f"block {blocks[0]} has"
+    shown = ", ".join(map(str, blocks[:8]))
+    more = f" and {len(blocks) - 8} more" if len(blocks) > 8 else ""
+    return f"blocks {shown}{more} have"
+
+
+def bent_contacts(contacts, tolerance: float) -> np.ndarray:
+    """Per contact: its faces are planar only within the contact tolerances, and bent by more than ``tolerance``.
+
+    Faces bent by no more than the input's tolerance (a length) are planar as
+    far as the input can tell (float32 rounding bends every face a little).
+    """
+    return np.array([not c.planar and c.deviation > tolerance for c in contacts], dtype=bool)
+
+
+def rigid_across_bends(A: InterlockingMatrix, kernel: np.ndarray, bent, centroids) -> np.ndarray:
+    """The kernel motions that move no block relative to its neighbour across a bent contact (orthonormal columns).
+
+    Such a motion keeps the real faces of a bent contact together whatever
+    their bend, so it is a sliding motion of the real assembly too.  Two
+    blocks move as one rigid body when their twists agree as motions of
+    space: the same ``omega``, and translations about the two centroids that
+    differ by ``omega x (c_j - c_i)``; a free block against a fixed one stands still.
+    """
+    if not len(bent) or not kernel.shape[1]:
+        return kernel
+    size = A.block_size
+    column = {int(b): size * k for k, b in enumerate(A.free)}
+    entries = []  # (equation, column, coefficient); equation e says sum coefficient * x[column] = 0
+    for c in bent:
+        i, j = column.get(c.i), column.get(c.j)
+        if i is None and j is None:
+            continue
+        first = len(entries) and entries[-1][0] + 1
+        for k in range(size):
+            entries += [(first + k, col + k, sign) for col, sign in ((j, 1.0), (i, -1.0)) if col is not None]
+        if i is not None and j is not None and not A.translational:
+            # t_j - t_i = omega_i x (c_j - c_i), lengths over the model size: -(omega x arm) = arm x omega
+            arm_x = np.cross(np.eye(3), (centroids[c.j] - centroids[c.i]) / A.length_scale)
+            entries += [(first + 3 + r, i + q, arm_x[r, q]) for r in range(3) for q in range(3)]
+    if not entries:
+        return kernel
+    equation, col, value = np.array(entries).T
+    C = sp.csr_matrix((value, (equation.astype(int), col.astype(int))), shape=(int(equation.max()) + 1, A.shape[1]))
+    _, sigma, vt = scipy.linalg.svd(np.atleast_2d(C @ kernel))
+    sigma = np.concatenate([sigma, np.zeros(kernel.shape[1] - len(sigma))])
+    return kernel @ vt[sigma <= MOVING_RTOL].T
+
+
+def unless_bent(verdict, A: InterlockingMatrix, found, bent, centroids):
+    """The "not interlocked" verdict, or an inconclusive one when its motion slides across a bent contact.
+
+    ``bent`` flags the contacts of ``found`` (:func:`bent_contacts`).  A
+    contact whose facets the tolerances merged from triangles bent by a small
+    angle stands for several planes, the model for one.  A motion that keeps
+    such a contact closed while one block moves along the other is admissible
+    for the model, but the real bend may block it (a fold of any angle stops a
+    slide across it): floating point cannot tell, so the verdict becomes
+    None, naming the contacts.  A motion that opens the contact, or moves both
+    blocks together, stays conclusive.
+    """
+    rows = np.flatnonzero(np.asarray(bent, dtype=bool)[A.row_contact])
+    opening = np.asarray(A.matrix @ A.columns(verdict.motion[A.free]))
+    if verdict.motion_kind == "opening":
+        rows = rows[opening[rows] <= MOVING_RTOL * opening.max()]
+    contacts = [found[c] for c in A.row_contact[rows]]
+    points = np.array([c.vertices[v] for c, v in zip(contacts, A.row_vertex[rows])]).reshape(-1, 3)
+    ends = np.array([(c.i, c.j) for c in contacts], dtype=int).reshape(-1, 2)
+    motion = verdict.motion
+    velocity = [np.cross(motion[b, :3], points - centroids[b]) + motion[b, 3:] for b in ends.T]
+    sliding = np.linalg.norm(velocity[1] - velocity[0], axis=1) > MOVING_RTOL if len(rows) else np.zeros(0, bool)
+    across = sorted(set(A.row_contact[rows[sliding]].tolist()))
+    if not across:
+        return verdict
+    worst = max((found[c] for c in across), key=lambda c: c.deviation)
+    return dataclasses.replace(verdict, interlocked=None, status=(
+        f"floating point is not conclusive: {moving_names(verdict.moving)} a first-order {verdict.motion_kind} "
+        f"motion, but it slides across {len(across)} contact(s) whose faces are planar only within the contact "
+        f"tolerances (blocks {worst.i}-{worst.j}: faces bent by up to {worst.deviation:.3g}, "
+        f"{worst.deviation / A.length_scale:.3g} x model size), which the real faces may block; smaller contact "
+        "tolerances (contacts(..., rtol=, angle_tol=)) keep such faces apart"))
+
+
+def unless_missed(verdict, assembly, reference, tolerance: float):
+    """The "not interlocked" verdict found on the caller's contacts, or None where the ``reference`` contacts block it.
+
+    ``reference`` are the contacts of the default search
+    (:func:`~interlock.verify.contacts.contacts`).  Contacts found with
+    tolerances below the noise of the input miss faces that touch: the
+    triangles of a noisy face pair are then neither coplanar nor parallel
+    within the tolerance, and a block without its contacts is free.  The
+    motion ``x`` (scaled to ``max |x| = 1``) must therefore also satisfy
+    ``(A_ref x)_r >= -eps_r`` on every reference row, with ``eps_r`` of
+    :func:`~interlock.verify.margin.row_tolerances` for the length
+    ``max(tolerance, BEND_FACTOR * deviation)`` of the row's contact, and
+    must not slide across a reference contact bent beyond ``tolerance``
+    (:func:`unless_bent`).  Otherwise the verdict is None, naming the pair.
+    """
+    A = interlocking_matrix(assembly, verdict.frame, verdict.translational, contacts=reference)
+    if not A.shape[0] or not len(A.free):
+        return verdict
+    x = A.columns(verdict.motion[A.free])
+    top = float(np.abs(x).max(initial=0.0))
+    if top == 0:
+        return verdict
+    deviation = np.array([c.deviation for c in reference], dtype=float)
+    eps = row_tolerances(A, reference, np.maximum(tolerance, BEND_FACTOR * deviation))
+    pushed = -(A.matrix @ (x / top)) / eps
+    worst = int(np.argmax(pushed))
+    if pushed[worst] > 1.0:
+        contact = reference[A.row_contact[worst]]
+        pairs = len({(reference[c].i, reference[c].j) for c in A.row_contact[pushed > 1.0]})
+        return dataclasses.replace(verdict, interlocked=None, status=(
+            f"floating point is not conclusive: on the given contacts, {moving_names(verdict.moving)} a "
+            f"first-order {verdict.motion_kind} motion, but it pushes blocks {contact.i} and {contact.j} into each "
+            f"other ({pushed[worst]:.3g} x the tolerance; {pairs} block pair(s) in all) where the default contact "
+            "search finds a contact that the given contacts lack: their tolerances are below the input's noise; "
+            "use the default contacts or larger rtol/angle_tol"))
+    return unless_bent(verdict, A, reference, bent_contacts(reference, tolerance), assembly.centroids)
