@@ -68,7 +68,7 @@ def _parser() -> argparse.ArgumentParser:
                "  interlock verify p4.vtu --fixed 0-3,7   (another frame)",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    verify.add_argument("paths", nargs="+", help="mesh files: OBJ, STL, PLY, GLB, 3MF, VTU, XDMF")
+    verify.add_argument("paths", nargs="+", help=f"mesh files: {MESH_FORMATS}")
     verify.add_argument("--fixed", default=None, metavar="LIST",
                         help="frame: block indices, e.g. 0,1 or 0-3,7 (default: the frame stored in the file, "
                              "if any, else none)")
@@ -124,7 +124,8 @@ def _parser() -> argparse.ArgumentParser:
                "  interlock stability type-c.json --mu 0.2 --tilt-axis xy30 --json",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    stability.add_argument("paths", nargs="+", help="a COMPAS JSON file, or mesh files (one per block)")
+    stability.add_argument("paths", nargs="+",
+                           help=f"a COMPAS JSON file, or mesh files (one per block): {MESH_FORMATS}")
     stability.add_argument("--mu", type=float, required=True, help="friction coefficient")
     stability.add_argument("--method", default="rbe", choices=("rbe", "cra"),
                            help="rbe: equilibrium only (default); cra: equilibrium realised by a virtual motion "
@@ -195,6 +196,9 @@ def _parser() -> argparse.ArgumentParser:
     return parser
 
 
+#: The mesh formats ``verify`` and ``stability`` read (interlock.blocks.meshfiles; any other that trimesh reads).
+MESH_FORMATS = ("OBJ, STL, PLY, GLB/GLTF, 3MF, OFF, VTU, XDMF (and other formats trimesh reads); "
+                "the files interlock generate writes keep their blocks and frame")
 #: Named periodic lozenge tilings for ``generate rhomblock --periodic``: their staircase counts.
 PERIODIC_KINDS = {"one-orientation": (1, 0, 0), "two-orientations": (1, 1, 0), "three-orientations": (1, 1, 1)}
 
@@ -203,6 +207,8 @@ def _output_arguments(parser) -> None:
     parser.add_argument("-o", "--output", required=True, metavar="FILE",
                         help="output file: .stl .obj .ply .glb .3mf .vtu .xdmf, or .png for a picture")
     parser.add_argument("--exploded", type=float, default=0.0, help="move blocks apart by this factor (default 0)")
+    parser.add_argument("--max-blocks", type=int, default=None, metavar="N",
+                        help="refuse to make more than N blocks (default 100,000; counted before anything is made)")
 
 
 def _lattice_arguments(parser) -> None:
@@ -353,6 +359,10 @@ def _run_stability(args) -> int:
 
     paths = args.paths[0] if len(args.paths) == 1 else args.paths
     assembly = Assembly.load(paths) if args.fixed is None else Assembly.load(paths, frame=_indices(args.fixed))
+    if not assembly.frame:  # the library's message speaks of frame=[...]; a CLI user gives --fixed
+        stored = "no supports are marked in the file" if args.fixed is None else "--fixed names none"
+        raise InterlockError(f"the assembly has no supports ({stored}): give the fixed blocks with --fixed, "
+                             "e.g. --fixed 0,1; without supports nothing can carry the weight")
     if args.time_limit is not None and args.method != "cra":
         raise InterlockError("--time-limit applies to --method cra only (rbe is one LP)")
     cra_options = {} if args.time_limit is None else {"time_limit": args.time_limit}
@@ -480,7 +490,7 @@ def _run_generate_wallpaper(args) -> int:
 
     group = wallpaper.group(args.group, a=args.a, b=args.b, gamma=args.gamma)
     block = escher_block(group, dict(_edge_points(text) for text in args.deform), height=args.height)
-    assembly = patch(block, args.radius * math.sqrt(group.cell_area), frame="boundary")
+    assembly = patch(block, args.radius * math.sqrt(group.cell_area), frame="boundary", **_limit(args))
     return _write(assembly, args)
 
 
@@ -488,7 +498,11 @@ def _run_generate_rhomblock(args) -> int:
     from interlock.blocks import cell_patch, random_hexagon, rhomblock_assembly, staircase
 
     if args.hexagon is not None:
-        assembly = rhomblock_assembly(random_hexagon(*args.hexagon, seed=args.seed), args.variant, frame="boundary")
+        from tqdm import tqdm
+
+        with tqdm(desc="random tiling", unit="sweep", disable=None, leave=False) as bar:
+            tiling = random_hexagon(*args.hexagon, seed=args.seed, progress=bar.update, **_limit(args))
+        assembly = rhomblock_assembly(tiling, args.variant, frame="boundary")
     else:
         counts = PERIODIC_KINDS.get(args.periodic)
         if counts is None:
@@ -497,8 +511,17 @@ def _run_generate_rhomblock(args) -> int:
             except ValueError:
                 raise InterlockError(f"cannot read --periodic {args.periodic!r}: give staircase counts N0,N1,N2 "
                                      f"or one of {', '.join(PERIODIC_KINDS)}") from None
-        assembly = cell_patch(rhomblock_assembly(staircase(counts), args.variant), args.radius)
+        assembly = cell_patch(rhomblock_assembly(staircase(counts), args.variant), args.radius, **_limit(args))
     return _write(assembly, args)
+
+
+def _limit(args) -> dict:
+    """``max_blocks`` for a generator, from ``--max-blocks`` (its default when not given)."""
+    if args.max_blocks is None:
+        return {}
+    if args.max_blocks < 1:
+        raise InterlockError(f"--max-blocks must be at least 1, got {args.max_blocks}")
+    return {"max_blocks": args.max_blocks}
 
 
 def _write(assembly, args) -> int:
@@ -536,10 +559,16 @@ def _indices(text: str) -> list[int]:
     """'0,1,4-6' -> [0, 1, 4, 5, 6]."""
     out = []
     for part in filter(None, (p.strip() for p in text.split(","))):
-        low, dash, high = part.partition("-")
+        low, dash, high = (s.strip() for s in part.partition("-"))
         if not low.isdigit() or (dash and not high.isdigit()):
             raise InterlockError(f"cannot read block list {text!r}: use indices and ranges such as 0,1 or 0-3,7")
+        if dash and int(high) < int(low):
+            raise InterlockError(f"cannot read block list {text!r}: the range {part} runs backwards; write it "
+                                 f"{int(high)}-{int(low)}")
         out += list(range(int(low), int(high) + 1)) if dash else [int(low)]
+    if not out and text.strip():  # "" is an explicit empty frame; "," names nothing by mistake
+        raise InterlockError(f"cannot read block list {text!r}: it names no block; use indices and ranges such as "
+                             "0,1 or 0-3,7")
     return out
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from collections.abc import Sequence
 from functools import cached_property
 from pathlib import Path
@@ -16,7 +17,8 @@ from interlock.blocks.meshfiles import BLOCK_DATA, HEADER_MARKER, STL_RECORD, re
 from interlock.blocks.repair import TJUNCTION_RTOL, split_t_junctions, unmatched_edges
 from interlock.errors import AssemblyError
 
-__all__ = ["Assembly", "AssemblyError", "load_compas", "NEIGHBOUR_RTOL", "RIGID_TOL", "KIND_DECIMALS", "HEADER_MARKER", "STL_RECORD",
+__all__ = ["Assembly", "AssemblyError", "load_compas", "NEIGHBOUR_RTOL", "RIGID_TOL", "KIND_DECIMALS", "HEADER_MARKER",
+           "STL_RECORD",
            "BLOCK_DATA"]
 
 #: Bounding boxes closer than this (relative to the model size) count as touching.
@@ -74,10 +76,12 @@ class Assembly:
         self.meshes: tuple[trimesh.Trimesh, ...] = _checked_meshes(
             meshes, [_mesh_name(k, labels, one_mesh_per_block) for k in range(len(meshes))])
         if types.size and (types.min() < 0 or types.max() >= len(self.meshes)):
-            raise AssemblyError(f"block types must index the {len(self.meshes)} meshes, got values {types.min()}..{types.max()}")
+            raise AssemblyError(f"block types must index the {len(self.meshes)} meshes, "
+                                f"got values {types.min()}..{types.max()}")
         transforms = np.asarray(transforms, dtype=float).reshape(-1, 4, 4)
         if len(transforms) != len(types):
-            raise AssemblyError(f"got {len(types)} block types but {len(transforms)} transforms; give one of each per block")
+            raise AssemblyError(f"got {len(types)} block types but {len(transforms)} transforms; "
+                                "give one of each per block")
         _check_transforms(transforms)
         types.setflags(write=False)
         transforms.setflags(write=False)
@@ -155,6 +159,7 @@ class Assembly:
         >>> len(row), row.frame, row.info["frame_from"], fixed.frame, fixed.info["frame_from"]
         (3, (), 'none', (0, 2), 'argument')
         """
+        paths = _paths(paths)
         if isinstance(paths, (str, Path)) and Path(paths).suffix.lower() == ".json":  # COMPAS; frame: node keys
             assembly = load_compas(paths, supports=None if frame is None else list(frame))
             assembly.info["frame_from"] = assembly.info["supports_from"]
@@ -387,6 +392,18 @@ def load_compas(path, supports=None) -> Assembly:
     return Assembly.from_meshes(meshes, frame=frame, labels=labels, info=info)
 
 
+def _paths(paths):
+    """One path (str or Path), or a list of them; an :class:`AssemblyError` for anything else (None, 42, ...)."""
+    if isinstance(paths, (str, os.PathLike)):
+        return Path(paths)
+    if isinstance(paths, Sequence) and not isinstance(paths, bytes) and all(
+            isinstance(p, (str, os.PathLike)) for p in paths):
+        return list(paths)
+    got = type(paths).__name__ if not isinstance(paths, Sequence) else f"a {type(paths).__name__} holding " + \
+        ", ".join(sorted({type(p).__name__ for p in paths if not isinstance(p, (str, os.PathLike))}))
+    raise AssemblyError(f"Assembly.load needs a file path (str or Path) or a list of them, got {got}")
+
+
 def _mesh_name(k: int, labels, one_mesh_per_block: bool) -> str:
     """How error messages name mesh ``k``: by its block (and label) when every block has its own mesh."""
     if not one_mesh_per_block:
@@ -456,7 +473,8 @@ def _check_transforms(transforms):
     linear = transforms[:, :3, :3]
     err = np.abs(linear @ linear.transpose(0, 2, 1) - np.eye(3)).max(initial=0.0)
     if err > RIGID_TOL:
-        raise AssemblyError(f"transforms must be rigid motions or mirror images (orthogonal linear part); deviation {err:.2e}")
+        raise AssemblyError("transforms must be rigid motions or mirror images (orthogonal linear part); "
+                            f"deviation {err:.2e}")
 
 
 def _checked_lattice(lattice) -> np.ndarray:

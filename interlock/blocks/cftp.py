@@ -17,8 +17,12 @@ CFTP_FIRST_EPOCH = 8
 _CHUNK = 64
 
 
-def uniform_plane_partition(a: int, b: int, c: int, rng: np.random.Generator) -> np.ndarray:
-    """A uniform plane partition in the ``a x b x c`` box (Propp-Wilson; see :func:`~interlock.blocks.lozenge.random_hexagon`).
+def uniform_plane_partition(a: int, b: int, c: int, rng: np.random.Generator, progress=None) -> np.ndarray:
+    """A uniform plane partition in the ``a x b x c`` box (Propp-Wilson).
+
+    See :func:`~interlock.blocks.lozenge.random_hexagon`.
+
+    ``progress``, if given, is called as ``progress(sweeps)`` after every chunk of sweeps.
 
     >>> uniform_plane_partition(2, 2, 2, np.random.default_rng(0)).shape
     (2, 2)
@@ -38,6 +42,8 @@ def uniform_plane_partition(a: int, b: int, c: int, rng: np.random.Generator) ->
             left = CFTP_FIRST_EPOCH * 2 ** max(epoch - 1, 0)
             while left:
                 _sweeps(chains, epoch_rng.random((min(_CHUNK, left), a, b)), masks)
+                if progress is not None:
+                    progress(min(_CHUNK, left))
                 left -= min(_CHUNK, left)
         if np.array_equal(chains[0], chains[1]):
             return chains[0, 1:-1, 1:-1].copy()

@@ -5,12 +5,14 @@ from __future__ import annotations
 import math
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
+from numbers import Integral
 
 import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import breadth_first_order
 
 from interlock.blocks.cftp import uniform_plane_partition
+from interlock.blocks.limits import MAX_BLOCKS, check_block_count
 from interlock.blocks.trilattice import (DOWN, LATTICE_BASIS, LOZENGE_CORNERS, UP, UP_OFFSETS, Lozenge, TilingError,
                                          as_integers, as_lozenges, as_plane_partition, as_region, cell_keys,
                                          gauss_reduced, hexagon_sizes, hexagon_triangles, lookup, up_cells)
@@ -93,7 +95,7 @@ class LozengeTiling:
         ... # doctest: +ELLIPSIS
         Traceback (most recent call last):
         ...
-        interlock.blocks.trilattice.TilingError: the lozenges leave 1 triangle(s) of the region uncovered, e.g. U(1, 0)...
+        interlock.blocks.trilattice.TilingError: the lozenges leave 1 triangle(s) of the region uncovered, ...
         """
         tiling = cls(lozenges)
         if region is not None:
@@ -329,7 +331,7 @@ class LozengeTiling:
         return cell_keys(self._reduce(tri[:, :2]), tri[:, 2])
 
 
-def random_hexagon(a: int, b: int, c: int, seed) -> LozengeTiling:
+def random_hexagon(a: int, b: int, c: int, seed, *, max_blocks: int = MAX_BLOCKS, progress=None) -> LozengeTiling:
     """A uniformly random lozenge tiling of the ``a x b x c`` hexagon, by coupling from the past.
 
     Parameters
@@ -337,7 +339,12 @@ def random_hexagon(a: int, b: int, c: int, seed) -> LozengeTiling:
     a, b, c : int
         The hexagon (non-negative); the tiling has ``ab + bc + ca`` lozenges.
     seed : int, numpy.random.Generator or SeedSequence
-        The source of randomness (``numpy.random.default_rng(seed)``).
+        The source of randomness (``numpy.random.default_rng(seed)``); an int must be >= 0.
+    max_blocks : int
+        Refuse a hexagon of more lozenges than this, before sampling
+        (:data:`~interlock.blocks.limits.MAX_BLOCKS`).
+    progress : callable, optional
+        Called as ``progress(sweeps)`` as coupling from the past runs (for a progress bar).
 
     Returns
     -------
@@ -363,7 +370,15 @@ def random_hexagon(a: int, b: int, c: int, seed) -> LozengeTiling:
     (300, (100, 100, 100))
     """
     a, b, c = hexagon_sizes(a, b, c)
-    return LozengeTiling.from_plane_partition(uniform_plane_partition(a, b, c, np.random.default_rng(seed)), c)
+    check_block_count(a * b + b * c + c * a, f"a {a} x {b} x {c} hexagon", max_blocks)
+    if isinstance(seed, (bool, np.bool_)) or (isinstance(seed, Integral) and seed < 0):
+        raise TilingError(f"seed must be an integer >= 0 (or a numpy Generator or SeedSequence), got {seed!r}")
+    try:
+        rng = np.random.default_rng(seed)
+    except (TypeError, ValueError) as error:
+        raise TilingError(f"seed must be an integer >= 0 (or a numpy Generator or SeedSequence), got {seed!r}: "
+                          f"{error}") from None
+    return LozengeTiling.from_plane_partition(uniform_plane_partition(a, b, c, rng, progress), c)
 
 
 def staircase(counts) -> LozengeTiling:

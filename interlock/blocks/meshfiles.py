@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+import contextlib
+import io
+import math
+import os
 import re
 import zipfile
 from dataclasses import dataclass
@@ -119,9 +123,7 @@ def read_mesh_file(path, split: bool = True) -> MeshFile:
     >>> found.names, found.frame, [round(float(m.volume), 6) for m in found.meshes]
     (('left', 'right'), (1,), [0.166667, 0.166667])
     """
-    path = Path(path)
-    if not path.is_file():
-        raise AssemblyError(f"mesh file {path} does not exist")
+    path = _mesh_path(path)
     reader = {".obj": _obj_file, ".stl": _indexed_file, ".ply": _indexed_file, ".vtu": _indexed_file,
               ".xdmf": _indexed_file}.get(path.suffix.lower(), _scene_file)
     try:
@@ -134,6 +136,8 @@ def read_mesh_file(path, split: bool = True) -> MeshFile:
         raise AssemblyError(f"cannot read {path} as a mesh ({type(error).__name__}: {error})") from None
     if not found.meshes:
         raise AssemblyError(f"{path} holds no triangle mesh")
+    if not all(np.isfinite(mesh.vertices).all() for mesh in found.meshes):
+        raise AssemblyError(f"{path} has vertex coordinates that are not finite numbers (NaN or infinity)")
     if found.announced is not None and found.announced != len(found.meshes):
         raise AssemblyError(f"{path} is cut short or damaged: it announces {found.announced} blocks, "
                             f"it holds {len(found.meshes)}")
@@ -143,6 +147,18 @@ def read_mesh_file(path, split: bool = True) -> MeshFile:
     if split and not separated and len(found.meshes) == 1:
         found = _splitgroup_meshes(path, found)
     return found
+
+
+def _mesh_path(path) -> Path:
+    """``path`` as a Path to an existing file; an :class:`AssemblyError` that says what it is otherwise."""
+    if not isinstance(path, (str, bytes, os.PathLike)):
+        raise AssemblyError(f"a mesh file is given by its path (str or path-like), got {type(path).__name__}")
+    path = Path(os.fsdecode(path))
+    if path.is_dir():
+        raise AssemblyError(f"{path} is a folder, not a mesh file; give the files in it, e.g. {path}/*.obj")
+    if not path.is_file():
+        raise AssemblyError(f"mesh file {path} does not exist")
+    return path
 
 
 def readgroup_meshes(path, split: bool = True) -> list[tuple[str, trimesh.Trimesh]]:
@@ -243,10 +259,11 @@ def _stl_triangles(path: Path):
     """Vertices, faces, block and fixed flag per face, and the header of a marked binary STL; None if unmarked."""
     with open(path, "rb") as file:
         header = file.read(80)
-        if not header.startswith(HEADER_MARKER):
-            return None
         count = int.from_bytes(file.read(4), "little")
         data = file.read()
+    if not header.startswith(HEADER_MARKER):
+        _check_plain_stl(path, header, count, len(data))
+        return None
     announced = _announced(header)
     if announced is None:
         raise AssemblyError(f"{path} says it holds interlock blocks but not how many ({header[:40]!r})")
@@ -259,6 +276,22 @@ def _stl_triangles(path: Path):
     if announced[1] is None:  # written before frames were stored: the attribute is the block index
         return vertices, faces, records["block"], None, announced
     return vertices, faces, records["block"] & (STL_FIXED_BIT - 1), records["block"] >= STL_FIXED_BIT, announced
+
+
+def _check_plain_stl(path: Path, header: bytes, count: int, size: int) -> None:
+    """A plain STL must be a complete binary file (84 bytes, then 50 per announced triangle) or ASCII text."""
+    if size == count * STL_RECORD.itemsize and count:
+        return  # binary, complete
+    if header.lstrip().lower().startswith(b"solid"):
+        with open(path, "rb") as file:
+            text = file.read()
+        if text.isascii():
+            if not re.search(rb"endsolid\b", text[-200:]):
+                raise AssemblyError(f"{path} is cut short: an ASCII STL ends with 'endsolid', this one does not")
+            return
+    raise AssemblyError(f"{path} is not a complete STL: as a binary STL its header announces {count:,} triangles "
+                        f"({count * STL_RECORD.itemsize:,} bytes after the header), it holds {size:,} bytes; "
+                        "it is cut short or damaged (and not ASCII STL either)")
 
 
 def _ply_triangles(path: Path):
@@ -285,7 +318,12 @@ def _meshio_triangles(path: Path):
     """Vertices, triangles, cell data :data:`BLOCK_DATA` and :data:`FIXED_DATA` of a VTU or XDMF file (meshio)."""
     import meshio  # here, not above: it takes a tenth of a second to import, and few files need it
 
-    mesh = meshio.read(path)
+    try:
+        with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+            mesh = meshio.read(path)
+    except SystemExit:  # meshio ends the program on some unreadable files: here it must not
+        raise AssemblyError(f"cannot read {path} as {path.suffix[1:].upper()}: the file is empty, cut short or "
+                            "damaged") from None
     kept = [k for k, cells in enumerate(mesh.cells) if cells.type == "triangle"]
     if BLOCK_DATA not in mesh.cell_data or not kept:
         raise AssemblyError(f"{path} has no triangles with cell data {BLOCK_DATA!r} telling the blocks apart; "
@@ -436,7 +474,10 @@ def _parse_obj(path: Path) -> _Obj:
             if tag == "v":
                 if len(parts) < 4:
                     raise ValueError("a vertex needs three coordinates")
-                rows.append([float(x) for x in parts[1:4]])
+                row = [float(x) for x in parts[1:4]]
+                if not all(map(math.isfinite, row)):
+                    raise ValueError("a vertex coordinate is not a finite number")
+                rows.append(row)
                 run += after_face
                 after_face = False
                 runs.append(run)

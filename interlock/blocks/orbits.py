@@ -6,6 +6,7 @@ import numpy as np
 
 from interlock.blocks.assembly import Assembly
 from interlock.blocks.escher import Block
+from interlock.blocks.limits import MAX_BLOCKS, check_block_count
 from interlock.errors import InterlockError
 
 __all__ = ["patch", "periodic_cell", "cell_patch", "cell_reach", "EXTENT_SLACK"]
@@ -14,7 +15,7 @@ __all__ = ["patch", "periodic_cell", "cell_patch", "cell_reach", "EXTENT_SLACK"]
 EXTENT_SLACK = 1e-9
 
 
-def patch(block: Block, radius: float, frame=None, center=None) -> Assembly:
+def patch(block: Block, radius: float, frame=None, center=None, *, max_blocks: int = MAX_BLOCKS) -> Assembly:
     """The blocks ``g(X)`` for every ``g`` whose tile ``g(F)`` meets a disc.
 
     Parameters
@@ -26,6 +27,9 @@ def patch(block: Block, radius: float, frame=None, center=None) -> Assembly:
     frame : None, "boundary" or iterable of int
         The fixed blocks: none, the outer ring (:meth:`Assembly.boundary`,
         the natural frame of main paper Cor. 4.8), or explicit indices.
+    max_blocks : int
+        Refuse a patch of more blocks than this, counted (from the disc's
+        area) before anything is made (:data:`~interlock.blocks.limits.MAX_BLOCKS`).
 
     Returns
     -------
@@ -47,6 +51,8 @@ def patch(block: Block, radius: float, frame=None, center=None) -> Assembly:
     if not isinstance(block, Block):
         raise InterlockError(f"patch needs a Block (from escher_block), got {type(block).__name__}")
     group = block.group
+    estimate = _patch_size(group, radius)
+    check_block_count(estimate, f"a {group.name} patch of radius {radius}", max_blocks)
     elements = group.elements_within(radius, center)
     present = set(elements)
     steps = [s.element for s in group.side_pairings()]
@@ -112,7 +118,7 @@ def cell_reach(cell: Assembly) -> int:
     return int(np.floor(extent + EXTENT_SLACK))
 
 
-def cell_patch(cell: Assembly, radius: int) -> Assembly:
+def cell_patch(cell: Assembly, radius: int, *, max_blocks: int = MAX_BLOCKS) -> Assembly:
     """The translates ``cell + a v1 + b v2`` with ``max(|a|, |b|) <= radius``, free, inside a fixed ring.
 
     The ring holds every translate that can touch a free one (``radius < max(|a|,
@@ -132,6 +138,7 @@ def cell_patch(cell: Assembly, radius: int) -> Assembly:
     if isinstance(radius, bool) or not isinstance(radius, (int, np.integer)) or radius < 0:
         raise InterlockError(f"cell_patch needs a whole number of cells >= 0 as radius, got {radius!r}")
     outer = int(radius) + cell_reach(cell)
+    check_block_count((2 * outer + 1) ** 2 * len(cell), f"a patch of {radius} cells around the cell", max_blocks)
     steps = range(-outer, outer + 1)
     offsets = sorted(((a, b) for a in steps for b in steps), key=lambda o: (max(abs(o[0]), abs(o[1])), o))
     k = len(cell)
@@ -146,6 +153,18 @@ def cell_patch(cell: Assembly, radius: int) -> Assembly:
     info = {**cell.info, "cell_radius": int(radius), "ring": outer - int(radius), "cell_labels": list(cell.labels)}
     return Assembly(cell.meshes, np.tile(cell.types, len(offsets)), np.array(transforms), labels=labels,
                     frame=frame, info=info)
+
+
+def _patch_size(group, radius) -> float:
+    """About how many tiles meet a disc of ``radius``: its area, widened by a cell's size, over a tile's area."""
+    try:
+        radius = float(radius)
+    except (TypeError, ValueError):
+        return 0.0  # not a number: elements_within says so
+    if not np.isfinite(radius):
+        return 0.0  # likewise
+    tile = group.cell_area / group.point_group_order
+    return np.pi * (abs(radius) + 2 * np.sqrt(group.cell_area)) ** 2 / tile
 
 
 def _lattice(cell: Assembly) -> np.ndarray:

@@ -139,6 +139,9 @@ def rhomblock_assembly(tiling: LozengeTiling, variant: int = 0, frame=None) -> A
     """
     if not isinstance(tiling, LozengeTiling):
         raise TilingError(f"rhomblock_assembly needs a LozengeTiling, got {type(tiling).__name__}")
+    if not len(tiling):
+        raise TilingError("the tiling has no lozenges, so there is nothing to place RhomBlocks on "
+                          "(a hexagon needs two sides > 0: it has a b + b c + c a lozenges)")
     transforms = rhomblock_transforms(tiling, variant)
     info = {"block": "RhomBlock", "variant": int(variant), "lozenges": len(tiling),
             "orientation_counts": list(tiling.orientation_counts)}

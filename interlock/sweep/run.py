@@ -17,6 +17,7 @@ from concurrent.futures import Executor, ProcessPoolExecutor, as_completed
 from pathlib import Path
 
 import interlock
+from interlock.blocks.limits import memory_text
 from interlock.files import atomic_write, write_atomically
 from interlock.sweep.record import evaluate_chunk
 from interlock.sweep.spec import SweepError, SweepSpec, load_spec
@@ -132,8 +133,9 @@ def check_size(spec: SweepSpec, max_points: int = MAX_POINTS) -> int:
         raise SweepError(f"max_points must be an integer >= 1, got {max_points!r}")
     size = spec.size
     if size > max_points:
-        raise SweepError(f"the spec has {size:,} points (about {_bytes(size * BYTES_PER_POINT)} in memory), more than "
-                         f"the limit {max_points:,}; use fewer steps or samples, or raise the limit (--max-points)")
+        raise SweepError(f"the spec has {size:,} points (about {memory_text(size * BYTES_PER_POINT)} in memory), "
+                         f"more than the limit {max_points:,}; use fewer steps or samples, or raise the limit "
+                         "(--max-points)")
     return size
 
 
@@ -147,13 +149,6 @@ def read_records(path) -> list[dict]:
         raise SweepError(f"no sweep output at {path}")
     records = (_JsonLines if path.suffix == ".jsonl" else _Parquet).read(path)[1]
     return sorted(records, key=lambda r: r["index"])
-
-
-def _bytes(count: float) -> str:
-    for unit in ("B", "KB", "MB", "GB", "TB"):
-        if count < 1000 or unit == "TB":
-            return f"{count:.0f} {unit}"
-        count /= 1000
 
 
 def _writer(path: Path, resume: bool):
