@@ -30,15 +30,36 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return args.run(args)
     except InterlockError as error:
-        print(f"interlock {args.command}: error: {error}", file=sys.stderr)
+        print(f"interlock {args.command}: error: {_one_line(error)}", file=sys.stderr)
         return EXIT_BAD_INPUT
+    except OSError as error:  # a file the checks could not foresee (permissions, a full disk, ...)
+        where = f" {error.filename}" if error.filename else ""
+        print(f"interlock {args.command}: error:{where}: {error.strerror or error}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except MemoryError:
+        print(f"interlock {args.command}: error: out of memory; try a smaller input (or --max-blocks / --max-points "
+              "lower)", file=sys.stderr)
+        return 1
     except KeyboardInterrupt:
         print("interlock: interrupted", file=sys.stderr)
         return 130
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse, but a bad argument is one line on stderr (``interlock verify: error: ...``) and exit status 2."""
+
+    def error(self, message):
+        command = self.prog if self.prog.startswith("interlock") else f"interlock {self.prog}"
+        self.exit(EXIT_BAD_INPUT, f"{command}: error: {message} (see {command} --help)\n")
+
+
+def _one_line(error) -> str:
+    """An error's message on one line (a message quoting a file's line may hold a line break)."""
+    return " ".join(str(error).split())
+
+
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="interlock",
         description="Generate, export and verify interlocking assemblies of rigid blocks.",
     )
