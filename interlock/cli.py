@@ -406,6 +406,10 @@ def _run_stability(args) -> int:
         print(json.dumps({**result.to_dict(), "critical_tilt_degrees": tilt}, indent=2))
         return 0
     print(result)
+    if "friction utilisation" in str(result):
+        print("  (friction utilisation: the largest |friction| / (mu x normal force) at one contact vertex of the "
+              "forces found, against the round cone; not a safety factor, and above 1 on the polygonal cone's "
+              "corners; see docs/statics.md)")
     if tilt is not None:
         angle = "stable up to 180 degrees" if tilt >= 180 else f"{tilt:.1f} degrees"
         print(f"critical tilt about {args.tilt_axis}: {angle}")

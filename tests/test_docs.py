@@ -30,3 +30,86 @@ def test_links_between_pages_point_to_pages():
     broken = [(p.name, link) for p in DOCS.glob("*.md") for link in re.findall(r"\]\(([\w.-]+\.md)\)", p.read_text())
               if not (DOCS / link).is_file()]
     assert broken == []
+
+
+# --- the README: its Python examples and its command lines give the output it shows ---------------------------
+
+README = DOCS.parent / "README.md"
+
+
+def _blocks(language: str) -> list[str]:
+    import re
+
+    return re.findall(rf"```{language}\n(.*?)```", README.read_text(), flags=re.DOTALL)
+
+
+def _matches(expected: str, printed: str) -> bool:
+    """Whether ``printed`` starts as ``expected``, ``...`` standing for any text, whitespace and line breaks aside.
+
+    The README shows the start of an output (a command's first lines), so what follows is not compared.
+    """
+    import re
+
+    def words(text):
+        return " ".join(text.split())
+
+    pattern = ".*".join(re.escape(part) for part in words(expected).split("..."))
+    return re.match(pattern, words(printed), flags=re.DOTALL) is not None
+
+
+def _expected_after(lines: list[str], end: int) -> str:
+    """The comment lines right after line ``end`` (1-based, the statement's last line): its shown output."""
+    shown = []
+    for line in lines[end:]:
+        if not line.startswith("# "):
+            break
+        shown.append(line[2:])
+    return "\n".join(shown)
+
+
+@pytest.mark.filterwarnings(r"error:interlock\.[\w.]+ moved to:DeprecationWarning")
+def test_the_python_examples_of_the_readme_print_what_it_shows():
+    import ast
+    import contextlib
+    import io
+
+    namespace, wrong = {}, []  # the blocks run in order, as a reader would paste them
+    for source in _blocks("python"):
+        lines = source.splitlines()
+        for statement in ast.parse(source).body:
+            printed = io.StringIO()
+            with contextlib.redirect_stdout(printed):
+                exec(compile(ast.Module([statement], []), "README.md", "exec"), namespace)
+            expected = _expected_after(lines, statement.end_lineno)
+            if expected and not _matches(expected, printed.getvalue()):
+                wrong.append((lines[statement.lineno - 1], expected, printed.getvalue()))
+    assert wrong == []
+
+
+def _commands() -> list[tuple[str, str]]:
+    """(command, shown output) for every ``$ interlock ...`` line of the README's text blocks."""
+    out = []
+    for block in _blocks("text"):
+        for chunk in block.split("$ ")[1:]:
+            command, _, shown = chunk.partition("\n")
+            out.append((command, shown.strip()))
+    return out
+
+
+@pytest.mark.parametrize("command, shown", _commands(), ids=[c for c, _ in _commands()])
+def test_the_commands_of_the_readme_print_what_it_shows(command, shown, reference_data, tmp_path):
+    import contextlib
+    import io
+    import shlex
+
+    from interlock.cli import main
+
+    argv = shlex.split(command)[1:]
+    if any("bunny/" in a for a in argv):  # the TopoLite bunny of the reference data, part_{1..80}.obj
+        bunny = reference_data / "topolite" / "bunny"
+        argv = [a for a in argv if "bunny/" not in a]
+        argv[1:1] = [str(bunny / f"part_{k}.obj") for k in range(1, 81)]
+    printed = io.StringIO()
+    with contextlib.redirect_stdout(printed):
+        assert main(argv) == 0
+    assert _matches(shown, printed.getvalue().strip().split("\ntimings:")[0]), (shown, printed.getvalue())

@@ -221,9 +221,10 @@ def test_fig_5_contacts_and_frame(layer):
     found = contacts(layer)
     counts = Counter(k for c in found for k in (c.i, c.j))
     # every block touches the four neighbours across its tile's edges in one tilted face each
-    assert set(layer.frame) == {k for k in range(len(layer)) if counts[k] < 4}
-    assert 0 < len(layer.frame) < len(layer) and layer.frame == layer.boundary()
-    assert all(counts[k] == 4 for k in range(len(layer)) if k not in layer.frame)
+    ring = layer.boundary()
+    assert set(ring) == {k for k in range(len(layer)) if counts[k] < 4}
+    assert 0 < len(ring) < len(layer) and set(ring) <= set(layer.frame)
+    assert all(counts[k] == 4 for k in range(len(layer)) if k not in ring)
     assert all(0 < abs(c.normal[2]) < 1 for c in found)
     face_areas = {round(a, 9) for a in layer.meshes[0].area_faces}
     assert all(round(2 * c.area, 9) in face_areas for c in found)  # each contact is half a face
@@ -440,3 +441,16 @@ def _vertex_sets(meshes, plane_map):
 
 def _edge_vectors(mesh):
     return np.diff(mesh.vertices[mesh.edges_unique], axis=1)[:, 0]
+
+
+def test_fig_5a_default_frame_is_the_red_p4_frame_and_interlocks():
+    from interlock.verify import check
+
+    layer = tetrahedra("p4", radius=1.5)
+    along_x = {k for k in range(len(layer)) if abs(layer.transforms[k][0, 0]) > 0.5}
+    assert set(layer.frame) == along_x | set(layer.boundary())
+    assert check(layer).interlocked is True
+    assert tetrahedra("p4", radius=1.5, frame="boundary").frame == layer.boundary()
+    assert tetrahedra("p6", radius=1.0).frame == tetrahedra("p6", radius=1.0).boundary()  # no frame drawn
+    with pytest.raises(PresetError, match="frame must be 'figure', 'boundary'"):
+        tetrahedra("p4", frame="red")

@@ -34,8 +34,8 @@ _DECIMALS = 6
 _TOUCH_RTOL = 1e-7
 
 
-def tetrahedra(symmetry: str = "p4", radius: float = 1.5, center=(0.0, 0.0)) -> Assembly:
-    """A layer of tetrahedra with wallpaper symmetry, framed by its outer ring (Fig. 5a-c).
+def tetrahedra(symmetry: str = "p4", radius: float = 1.5, center=(0.0, 0.0), frame="figure") -> Assembly:
+    """A layer of tetrahedra with wallpaper symmetry, framed as in Fig. 5a-c.
 
     Built by intersecting half-spaces as in [3]: a plane tiling by
     quadrilaterals lies at mid-height ``z = 1/2`` of the layer ``0 <= z <= 1``;
@@ -70,25 +70,35 @@ def tetrahedra(symmetry: str = "p4", radius: float = 1.5, center=(0.0, 0.0)) -> 
         about ``center`` (in lattice units; >= 0) are kept.
     center : (float, float)
         Centre of the disc (default: the origin, a 4-, 3- or 6-fold centre).
+    frame : "figure", "boundary", None or iterable of int
+        The fixed blocks.  ``"figure"`` (default): the paper's frame.  For
+        p4 that is Fig. 5a's red frame, a p4-symmetric one: the tetrahedra
+        of one orientation class (whose lower edge runs along x) and the
+        outer ring; the layer then interlocks.  For p3 and p6, whose figures
+        show no frame, the outer tetrahedra, as the paper suggests (to first
+        order the inner ones then slide: ``check`` says "not infinitesimally
+        interlocked").  ``"boundary"``: the outer ring only; None: no frame.
 
     Returns
     -------
     Assembly
         One shared tetrahedron mesh, transforms ``group.to_3d(g)``, labels the
         group elements ``g`` (one per block, ordered by distance of the tile
-        from ``center``); frame and boundary: the blocks with a neighbour
-        across an edge of their tile missing from the patch.
+        from ``center``); boundary: the blocks with a neighbour across an
+        edge of their tile missing from the patch; the frame chosen by ``frame``.
 
     Raises
     ------
     PresetError
-        Unknown ``symmetry``, ``radius`` negative or not finite.
+        Unknown ``symmetry`` or ``frame``, ``radius`` negative or not finite.
 
     Examples
     --------
     >>> layer = tetrahedra("p4", radius=1.0)
-    >>> len(layer), len(layer.frame), round(float(layer.volumes[0]), 12)
-    (16, 12, 0.333333333333)
+    >>> len(layer), len(layer.boundary()), len(layer.frame), round(float(layer.volumes[0]), 12)
+    (16, 12, 14, 0.333333333333)
+    >>> len(tetrahedra("p4", radius=1.0, frame="boundary").frame)
+    12
     """
     if not isinstance(symmetry, str) or symmetry not in _TETRAHEDRA:
         raise PresetError(f"unknown symmetry {symmetry!r} for the tetrahedra of Fig. 5; choose one of "
@@ -117,10 +127,26 @@ def tetrahedra(symmetry: str = "p4", radius: float = 1.5, center=(0.0, 0.0)) -> 
     tiles = [item[3] for item in order]
     ring = _open_tiles(tiles, _TOUCH_RTOL * scale)
     mesh = _tetrahedron(quad, slopes, _LAYER_HEIGHT)
-    return Assembly([mesh], np.zeros(len(order), dtype=int), [group.to_3d(item[2]) for item in order],
-                    labels=[item[2] for item in order], frame=ring, boundary=ring,
-                    info={"preset": "tetrahedra", "figure": _TETRAHEDRA_FIGURES[symmetry], "group": symmetry,
-                          "radius": radius, "height": _LAYER_HEIGHT, "slopes": slopes.tolist()})
+    layer = Assembly([mesh], np.zeros(len(order), dtype=int), [group.to_3d(item[2]) for item in order],
+                     labels=[item[2] for item in order], boundary=ring,
+                     info={"preset": "tetrahedra", "figure": _TETRAHEDRA_FIGURES[symmetry], "group": symmetry,
+                           "radius": radius, "height": _LAYER_HEIGHT, "slopes": slopes.tolist(),
+                           "frame": frame if isinstance(frame, str) or frame is None else "given"})
+    return layer.with_frame(_chosen_frame(layer, group, frame))
+
+
+def _chosen_frame(layer: Assembly, group, frame) -> list[int]:
+    """The blocks ``frame`` names (see :func:`tetrahedra`)."""
+    if frame is None:
+        return []
+    if isinstance(frame, str):
+        if frame == "boundary" or (frame == "figure" and group.name != "p4"):
+            return list(layer.boundary())
+        if frame == "figure":  # Fig. 5a, red: one orientation class (lower edge along x), and the ring
+            along_x = [i for i, g in enumerate(layer.labels) if abs(group.matrix(g)[0, 0]) > 0.5]
+            return sorted(set(along_x) | set(layer.boundary()))
+        raise PresetError(f"frame must be 'figure', 'boundary', None or block indices, got {frame!r}")
+    return list(frame)
 
 
 def _tetrahedron(quad, slopes, height) -> trimesh.Trimesh:
