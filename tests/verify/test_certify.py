@@ -7,6 +7,11 @@ from interlock.blocks import presets, random_hexagon, rhomblock_assembly
 from interlock.verify import check, interlocking_matrix
 from interlock.verify import certify as module
 from interlock.verify.certify import verified_stress
+from interlock.verify.verified import VerifiedStress
+
+
+def _without_sparse_verification(monkeypatch):
+    monkeypatch.setattr(module, "verified_sparse_stress", lambda A, w: VerifiedStress(-np.inf, 0.0, np.inf))
 
 
 def test_verified_floating_point_certifies_an_interlocked_hexagon():
@@ -18,9 +23,12 @@ def test_verified_floating_point_certifies_an_interlocked_hexagon():
 def test_the_verified_bound_agrees_with_exact_arithmetic(monkeypatch):
     cubes = presets.interlocking_cubes()
     fast = check(cubes, certify=True)
+    _without_sparse_verification(monkeypatch)
+    dense = check(cubes, certify=True)
     monkeypatch.setattr(module, "VERIFIED_COLUMNS", 0)  # exact rational arithmetic only
     exact = check(cubes, certify=True)
-    assert fast.certified and exact.certified and "exactly invertible" in exact.status
+    assert fast.certified and dense.certified and exact.certified and "exactly invertible" in exact.status
+    assert "smallest singular value at least" in fast.status and "invertible row basis" in dense.status
 
 
 def test_no_bound_for_a_singular_basis_or_a_stress_that_changes_sign():
@@ -40,6 +48,7 @@ def test_the_bound_is_close_to_the_exact_smallest_weight():
 
 
 def test_beyond_both_limits_the_verdict_says_it_is_not_certified_and_why(monkeypatch):
+    _without_sparse_verification(monkeypatch)
     monkeypatch.setattr(module, "VERIFIED_COLUMNS", 0)
     monkeypatch.setattr(module, "EXACT_COLUMNS", 0)
     v = check(presets.interlocking_cubes(), certify=True)
