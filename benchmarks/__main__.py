@@ -7,11 +7,12 @@ Each module writes ``<name>.json`` (machine, versions, medians, ratios) and
 import argparse
 import time
 
-from benchmarks import (accuracy, beyond, degeneracy, gallery, periodic, rhomblock, scaling, stability, sweep, verify,
-                        wallpaper)
+from benchmarks import (accuracy, beyond, certify, degeneracy, gallery, periodic, rhomblock, scaling, stability, sweep,
+                        verify, wallpaper)
 from benchmarks.common import add_arguments, use_results_folder
 
-MODULES = (wallpaper, rhomblock, verify, scaling, periodic, accuracy, degeneracy, gallery, stability, sweep, beyond)
+MODULES = (wallpaper, rhomblock, verify, scaling, certify, periodic, accuracy, degeneracy, gallery, stability, sweep,
+           beyond)
 
 parser = argparse.ArgumentParser(prog="python -m benchmarks", description="Run every benchmark.")
 add_arguments(parser)

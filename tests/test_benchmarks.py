@@ -8,8 +8,8 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-NAMES = ("wallpaper", "rhomblock", "verify", "scaling", "periodic", "accuracy", "degeneracy", "gallery", "stability",
-         "sweep", "beyond")
+NAMES = ("wallpaper", "rhomblock", "verify", "scaling", "certify", "periodic", "accuracy", "degeneracy", "gallery",
+         "stability", "sweep", "beyond")
 
 
 @pytest.fixture(scope="module")
@@ -38,6 +38,13 @@ def test_order_2_settles_every_case_of_its_benchmark(results):
     assert rows["block on pins, h c = 2"]["second_order"] == "interlocked (second order)"
     assert all(row["second_order"] == "not interlocked (finite motion shown)" and row["finite_motion_steps"]
                for name, row in rows.items() if name != "block on pins, h c = 2")
+
+
+def test_every_certificate_of_the_certify_benchmark_holds(results):
+    certify = results[0]["certify"]
+    rows = [row for family in certify["families"].values() for row in family["rows"]]
+    assert rows and all(row["certified"] for row in rows)
+    assert all(certify["large"][name]["certified"] for name in ("ring fixed", "one fixed"))
 
 
 def test_no_method_is_wrong_where_a_proof_labels_the_answer(results):
