@@ -67,14 +67,14 @@ import scipy.sparse as sp
 import shapely
 from scipy.optimize import Bounds, LinearConstraint, linprog, milp
 
-from interlock.verify.statics import cra_local
+from interlock.verify.statics import cra_large, cra_local
 from interlock.verify.statics.cra_compas import upstream_solution
-from interlock.verify.statics.cra_local import ACTIVE_TOL
+from interlock.verify.statics.cra_local import ACTIVE_TOL, SLIDE_TOL
 from interlock.verify.statics.equilibrium import (DEFAULT_EPS, DEFAULT_ETA, DEFAULT_SIDES, EquilibriumSystem,
-                                                  StabilityError, gravity_vector, json_float, positive)
+                                                  StabilityError, contact_words, gravity_vector, json_float, positive)
 
-__all__ = ["CRAResult", "CRAProblem", "cra", "decider", "DEFAULT_EPS", "DEFAULT_ETA", "DEFAULT_SECTORS", "DEFAULT_FORCE_BOUND",
-           "DEFAULT_MIN_SLIDE", "REFINED_SECTORS"]
+__all__ = ["CRAResult", "CRAProblem", "cra", "decider", "DEFAULT_EPS", "DEFAULT_ETA", "DEFAULT_SECTORS",
+           "DEFAULT_FORCE_BOUND", "DEFAULT_MIN_SLIDE", "REFINED_SECTORS", "SLIDE_TOL"]
 
 #: Angular sectors of the contact plane in the first MILP, and the refinements tried when its motion
 #: cannot be made exact.
@@ -84,8 +84,6 @@ REFINED_SECTORS = (8, 16)
 DEFAULT_FORCE_BOUND = 1e3
 #: Smallest virtual slide (along the sector bisector) of a vertex carrying friction, as a fraction of ``eps``.
 DEFAULT_MIN_SLIDE = 1e-3
-#: A vertex slides when ``|dd_t| > SLIDE_TOL * eps`` (it is closed when ``dd_n + eps <= ACTIVE_TOL * eps``).
-SLIDE_TOL = 1e-7
 #: Slack added to every bound the MILP derives by an LP (big Ms, the virtual-work bound and row), relative and
 #: absolute (forces in units of the weight, motions of eps): a solution of (11) often attains them exactly (a
 #: block pushed into a groove closes every vertex and does exactly the most work), and HiGHS' tolerances would
@@ -161,7 +159,8 @@ class CRAResult:
     def __str__(self) -> str:
         p = self.parameters
         return (f"CRA {self.status} (mu {p.get('mu')}, {p.get('cone')} cone with {p.get('sides')} sides, "
-                f"eta/eps {p.get('eta') / p.get('eps'):.3g}): {self.message}; {sum(self.timings.values()):.3g} s")
+                f"eta/eps {p.get('eta') / p.get('eps'):.3g}): {self.message}; "
+                f"{len(self.contacts)} contacts{contact_words(p)}; {sum(self.timings.values()):.3g} s")
 
     def to_dict(self) -> dict:
         """JSON-serialisable summary."""
@@ -314,6 +313,13 @@ class CRAProblem:
         rbe_forces, status_rbe, _, _ = self.system.solve_lp(gravity, least_force=True)
         if status_rbe == 0 and rbe_forces is None:  # nothing to carry (no free block touches anything)
             rbe_forces = np.zeros(0)
+        if status_rbe == 0 and len(self.system.points) > cra_large.LARGE_VERTICES and not known:
+            timings["lp"] += time.perf_counter() - started
+            status, forces, motion, message = cra_large.decide_large(
+                self, b_eq, len(self.system.points) * (1 + sectors), timings)
+            parameters = {**self.parameters, "sectors": tried, "gravity": gravity.tolist(), "route": "large"}
+            return self._result(status, message, None if forces is None else forces * total, motion, parameters,
+                                timings)
         work, most_work = self._most_work(b_eq) if status_rbe == 0 else (np.inf, None)
         quick = self._quick(b_eq, rbe_forces if status_rbe == 0 else None, known, most_work)
         timings["lp"] += time.perf_counter() - started
@@ -377,7 +383,7 @@ class CRAProblem:
                             motion if status == "stable" else None, parameters, timings)
 
     def _local(self, b_eq, rbe_forces, most_work, timings):
-        """:func:`~interlock.verify.statics.cra_local.last_resort`, timed (``lp`` for SLSQP and the checks, ``ipopt``)."""
+        """:func:`~interlock.verify.statics.cra_local.last_resort`, timed (``lp``: SLSQP and the checks; ``ipopt``)."""
         started = time.perf_counter()
         found = cra_local.last_resort(self, b_eq, rbe_forces.reshape(-1, 3), most_work, timings)
         timings["lp"] += time.perf_counter() - started - timings.get("ipopt", 0.0)

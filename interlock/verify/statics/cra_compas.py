@@ -7,9 +7,9 @@ import io
 import numpy as np
 
 from interlock.blocks.assembly import Assembly
-from interlock.verify.contacts import contacts as find_contacts
 from interlock.verify.statics.equilibrium import (DEFAULT_EPS, DEFAULT_ETA, StabilityError, block_densities,
                                                   gravity_vector, nonnegative, positive)
+from interlock.verify.statics.interfaces import statics_contacts
 
 __all__ = ["upstream_motion", "upstream_solution", "MISSING_MESSAGE", "UPSTREAM_VERSION"]
 
@@ -77,8 +77,9 @@ def upstream_motion(assembly, mu: float, gravity=(0.0, 0.0, -1.0), density=1.0, 
         (upstream's ``eps`` and ``d_bnd`` are ``eps * scale`` and ``eta * scale``);
         ``0 < eps < eta``.  The defaults are :func:`~interlock.verify.statics.cra.cra`'s
         (upstream's own are ``1e-4`` and ``1e-3`` absolute).
-    contacts : sequence of Contact, optional
-        Precomputed :func:`~interlock.verify.contacts.contacts`.
+    contacts : sequence of Contact, "interfaces" or "exact", optional
+        As for :func:`~interlock.verify.statics.rbe` (default: the interfaces of
+        :func:`~interlock.verify.statics.interfaces.interfaces`).
 
     Returns
     -------
@@ -157,7 +158,7 @@ def upstream_solution(assembly, mu: float, gravity=(0.0, 0.0, -1.0), density=1.0
     free = np.setdiff1d(np.arange(len(assembly)), fixed)
     if not len(free):
         return np.zeros((0, 6)), np.zeros((0, 3))
-    found = find_contacts(assembly) if contacts is None else tuple(contacts)
+    found = statics_contacts(assembly, contacts)[0]
     is_free = np.zeros(len(assembly), dtype=bool)
     is_free[free] = True
     used = [c for c in found if is_free[c.i] or is_free[c.j]]

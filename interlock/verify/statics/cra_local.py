@@ -33,6 +33,8 @@ __all__ = ["least_friction", "realise", "realise_least_friction", "settled_motio
 
 #: A vertex is closed when ``dd_n + eps <= ACTIVE_TOL * eps``.
 ACTIVE_TOL = 1e-7
+#: A closed vertex slides when ``|dd_t| > SLIDE_TOL * eps``.
+SLIDE_TOL = 1e-7
 #: Vertices within ``SNAP_TOL * eps`` of closed in a local solver's motion are snapped shut before checking.
 SNAP_TOL = 1e-2
 #: Most closed vertices for the local (SLSQP) repair of a MILP point; beyond, only the LP repairs run.

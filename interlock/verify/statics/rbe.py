@@ -53,8 +53,14 @@ def rbe(assembly: Assembly, mu: float, density: float = 1.0, gravity=(0.0, 0.0, 
     cone : {"paper", "inner"}
     sides : int
         Sides of the friction pyramid, ``>= 3`` (``>= 4`` for "paper", which is unbounded with 3).
-    contacts : sequence of Contact, optional
-        Precomputed :func:`~interlock.verify.contacts.contacts`.
+    contacts : None, "interfaces", "exact", Interfaces or sequence of Contact
+        The contact model (:func:`~interlock.verify.statics.interfaces.statics_contacts`).  Default
+        (``None`` or ``"interfaces"``): :func:`~interlock.verify.statics.interfaces.interfaces`, faces
+        facing each other within a quarter of the thinner block's thickness, as real structures' joints
+        meet (the armadillo vault's); ``"exact"``: :func:`~interlock.verify.contacts.contacts`, only
+        faces that touch (what :func:`~interlock.verify.check` uses); or contacts given, e.g. from
+        :func:`~interlock.verify.statics.interfaces.compas_interfaces`.  ``parameters["contacts"]``
+        records which, with the tolerances.
 
     Returns
     -------

@@ -1,0 +1,162 @@
+"""CRA on large models (hundreds of blocks, thousands of contact vertices): interior-point candidates, exact checks.
+
+:func:`~interlock.verify.statics.cra.cra` decides problem (11) by quick answers, a
+MILP with a binary per vertex and sector, and an exact LP at a motion.  Past
+:data:`LARGE_VERTICES` contact vertices the per-vertex LPs that bound the MILP
+(two per vertex), the MILP itself (the shelf's 380 binaries are undecided in
+10 minutes; the armadillo vault would have 50,000) and the dense local solvers
+are out of reach, and HiGHS' simplex takes about a minute per LP.  Here:
+
+1. RBE by Clarabel (:class:`~interlock.verify.statics.equilibrium.EquilibriumSystem`):
+   no equilibrium means "unstable". This is the only implication between the
+   two that holds in general: every solution of (11) satisfies (7b)-(7d), so
+   CRA stable implies RBE stable, and RBE unstable implies CRA unstable (CRA
+   paper, Sec. 2.2 and 3.1).  The converse fails (model H, Fig. 3): an RBE
+   equilibrium, even one with compression only and friction inside the cone,
+   proves nothing about (11) until a motion realises it (Eqs. (9)-(10)).
+2. Candidate motions by Clarabel, each checked by the exact LP of (11) at the
+   motion (:func:`exact`): the allowed motion of most work (by LP duality its
+   multipliers are a frictionless equilibrium that it realises whenever the
+   bound ``eta`` is nowhere active; where it is active, the multipliers are
+   forces at displacements of ``eta``, which (11) does not allow).
+3. Otherwise "inconclusive", saying what was tried and why the exact routes do
+   not reach the model, with the size of the MILP it would take.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import scipy.sparse as sp
+
+from interlock.verify.check import SOLVER_THREADS
+from interlock.verify.statics.cra_local import ACTIVE_TOL, SLIDE_TOL
+
+__all__ = ["LARGE_VERTICES", "CHECK_RTOL", "most_work", "exact", "decide_large"]
+
+#: Contact vertices above which :func:`~interlock.verify.statics.cra.cra` takes this route (the shelves of
+#: Fig. 7 and 12 have 60-90, the 36-voussoir arch 148, the armadillo vault 10,000-12,000).
+LARGE_VERTICES = 2000
+#: An interior-point solution of the exact LP is accepted when every residual of (11) at the motion
+#: (equilibrium, ``f_n >= 0``, ``alpha >= 0``, the friction pyramid) is at most this times the load
+#: (forces in units of the free blocks' weight): HiGHS' feasibility tolerance is 1e-7.
+CHECK_RTOL = 1e-7
+#: Closed vertices are those with ``dd_n + eps <= SNAP * eps`` in an interior-point motion (then made exact).
+SNAP = 1e-6
+
+
+def most_work(problem, b_eq):
+    """The allowed motion on which the load does the most work (Clarabel), and the LP's multipliers.
+
+    Returns ``(motion, forces)`` in the solver's units (``eps = 1``), ``forces = z_lower - z_upper`` per
+    vertex component (an equilibrium: ``A_eq forces = b``), or ``(None, None)``.
+    """
+    a_ub, b_ub = problem.allowed_motions
+    solved = _clarabel(b_eq, a_ub, b_ub)
+    if solved is None:
+        return None, None
+    q, z = solved
+    s = a_ub.shape[0] // 6
+    forces = z[3 * s:].reshape(-1, 3) - z[:3 * s].reshape(-1, 3)
+    return q, forces
+
+
+def exact(problem, b_eq, motion):
+    """Forces solving (11) exactly at ``motion`` (least ``sum f_n``), or ``None``: the LP of
+    ``CRAProblem.exact`` solved by Clarabel, then every residual checked (:data:`CHECK_RTOL`)."""
+    system = problem.system
+    dd = (problem.kinematic @ motion).reshape(-1, 3)
+    ratio = problem.ratio
+    if np.any(dd[:, 0] < -1.0 - 1e-6) or np.any(np.abs(dd) > ratio * (1 + 1e-6)):
+        return None
+    closed = dd[:, 0] + 1.0 <= ACTIVE_TOL
+    slide = dd[:, 1:]
+    sliding = closed & (np.hypot(slide[:, 0], slide[:, 1]) > SLIDE_TOL)
+    if not closed.any():
+        return None
+    n_closed, n_sliding = int(closed.sum()), int(sliding.sum())
+    normal_columns = system.a_eq[:, 0::3][:, closed]
+    slide_columns = (-(system.a_eq[:, 1::3] @ sp.diags(slide[:, 0]))
+                     - (system.a_eq[:, 2::3] @ sp.diags(slide[:, 1])))[:, sliding]
+    a_eq = sp.hstack([normal_columns, slide_columns], format="csc")
+    cone_rows = system.cone_rows
+    sides = len(cone_rows)
+    which = np.flatnonzero(sliding)
+    row = np.arange(n_sliding * sides)
+    column_of_normal = np.repeat((np.cumsum(closed) - 1)[which], sides)
+    normal_part = sp.csr_matrix((np.tile(cone_rows[:, 0], n_sliding), (row, column_of_normal)),
+                                shape=(len(row), n_closed))
+    alpha_part = sp.csr_matrix((-(slide[which] @ cone_rows[:, 1:].T).ravel(),
+                                (row, np.repeat(np.arange(n_sliding), sides))), shape=(len(row), n_sliding))
+    a_ub = sp.hstack([normal_part, alpha_part], format="csr")
+    n = n_closed + n_sliding
+    constraints = sp.vstack([a_eq, a_ub, -sp.eye(n)], format="csc")
+    right = np.concatenate([b_eq, np.zeros(a_ub.shape[0] + n)])
+    cost = np.concatenate([np.ones(n_closed), np.zeros(n_sliding)])
+    solved = _clarabel(cost, constraints, right, equalities=a_eq.shape[0])
+    if solved is None:
+        return None
+    x = np.maximum(solved[0], 0.0)
+    scale = max(float(np.abs(b_eq).max()), 1e-300)
+    if (np.abs(a_eq @ x - b_eq).max() > CHECK_RTOL * scale
+            or (a_ub @ x).max(initial=0.0) > CHECK_RTOL * scale):
+        return None
+    forces = np.zeros((len(dd), 3))
+    forces[closed, 0] = x[:n_closed]
+    forces[sliding, 1:] = -x[n_closed:, None] * slide[sliding]
+    return forces
+
+
+def decide_large(problem, b_eq, binaries: int, timings: dict):
+    """``(status, forces, motion, message)`` for a large model (see the module docstring); forces in units of
+    the free blocks' weight, the motion in units of ``eps``.  ``binaries``: the MILP's size, for the message."""
+    started = time.perf_counter()
+    motion, _ = most_work(problem, b_eq)
+    found = None
+    active = 0
+    if motion is not None:
+        dd = (problem.kinematic @ motion).reshape(-1, 3)
+        active = int(np.count_nonzero(np.abs(dd) >= problem.ratio * (1 - 1e-6)))
+        snapped = motion.copy()
+        near = dd[:, 0] + 1.0 <= SNAP
+        if near.any():  # close the nearly closed vertices exactly: least-squares step along their rows
+            rows = problem.kinematic[0::3][near]
+            step = sp.linalg.lsqr(rows, -1.0 - rows @ motion, atol=1e-14, btol=1e-14, iter_lim=5000)[0]
+            snapped = motion + step
+        for candidate in (snapped, motion):
+            forces = exact(problem, b_eq, candidate)
+            if forces is not None:
+                found = (candidate, forces)
+                break
+    timings["lp"] = timings.get("lp", 0.0) + time.perf_counter() - started
+    if found is not None:
+        motion, forces = found
+        return "stable", forces, motion, "equilibrium realised by the motion of most work (large model; exact check)"
+    why = ("the motion of most work does not realise an equilibrium: the bound eta is active at "
+           f"{active} displacement components, where its multipliers are forces at slides of eta that (11) "
+           "does not allow" if motion is not None else "the LP of most work did not solve")
+    return ("inconclusive", None, None,
+            f"RBE has an equilibrium (necessary, not sufficient); {why}; the MILP relaxation would have "
+            f"{binaries} binaries, beyond the exact route (the shelf's 380 are undecided in 10 min); a local "
+            f"solve of (11) as in the paper (compas_cra's IPOPT: 2,424 s on the armadillo, Table 5; "
+            f"cra(..., backend='compas_cra') checks its motion exactly) was not tried")
+
+
+def _clarabel(cost, constraints, right, equalities: int = 0):
+    """``min cost.x`` s.t. the first ``equalities`` rows of ``constraints x = right``, the rest ``<=``;
+    ``(x, z)`` (primal, dual) when Clarabel solves it, else ``None``."""
+    import clarabel
+
+    n = constraints.shape[1]
+    settings = clarabel.DefaultSettings()
+    settings.verbose = False
+    settings.max_threads = SOLVER_THREADS
+    cones = ([clarabel.ZeroConeT(equalities)] if equalities else []) + \
+        [clarabel.NonnegativeConeT(constraints.shape[0] - equalities)]
+    solution = clarabel.DefaultSolver(sp.csc_matrix((n, n)), np.asarray(cost, dtype=float),
+                                      sp.csc_matrix(constraints), np.asarray(right, dtype=float), cones,
+                                      settings).solve()
+    if str(solution.status) != "Solved":
+        return None
+    return np.asarray(solution.x), np.asarray(solution.z)
