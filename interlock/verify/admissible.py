@@ -127,7 +127,9 @@ def unless_missed(verdict, assembly, reference, tolerance: float):
     """The "not interlocked" verdict found on the caller's contacts, or None where the ``reference`` contacts block it.
 
     ``reference`` are the contacts of the default search
-    (:func:`~interlock.verify.contacts.contacts`).  Contacts found with
+    (:func:`~interlock.verify.contacts.contacts`), at least those of the
+    moving blocks (``involving=verdict.moving``: the others do not move
+    relative to each other).  Contacts found with
     tolerances below the noise of the input miss faces that touch: the
     triangles of a noisy face pair are then neither coplanar nor parallel
     within the tolerance, and a block without its contacts is free.  The

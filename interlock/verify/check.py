@@ -277,9 +277,8 @@ def check(assembly: Assembly, frame=None, translational: bool = False, certify: 
             motions = [unless_bent(v, A, found, bent, assembly.centroids) for v in motions]
         if contacts is not None:  # the caller's contacts may miss faces that touch: the default search is the judge
             limit = limit or rounding_tolerance(assembly)
-            reference = find_contacts(assembly)
-            motions = [unless_missed(v, assembly, reference, limit[0]) if v.interlocked is False else v
-                       for v in motions]
+            motions = [unless_missed(v, assembly, find_contacts(assembly, involving=v.moving), limit[0])
+                       if v.interlocked is False else v for v in motions]
         verdict = next((v for v in motions if v.interlocked is False), motions[0])
     elif stress is not None and rank_clear:
         verdict = Verdict(True, f"positive self-stress on all {A.shape[0]} rows and full column rank",

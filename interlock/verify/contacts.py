@@ -188,7 +188,7 @@ def contacts(assembly: Assembly, rtol: float = DEFAULT_CONTACT_RTOL, angle_tol: 
 
 def _pair_contacts(assembly, pairs, scale, rtol, angle_tol, area_rtol, gap=0.0) -> tuple[Contact, ...]:
     """Contacts of the given block pairs, tolerances relative to ``scale``."""
-    table = FacetTable(assembly, rtol * scale, angle_tol)
+    table = FacetTable(assembly, rtol * scale, angle_tol, needed=np.unique(pairs))
     gi, gj = _matches(table, pairs, (rtol + gap) * scale, angle_tol, scale, tilted=gap > 0)
     grid = 2.0 ** math.floor(math.log2(OVERLAY_GRID_RTOL * scale))  # a power of two keeps dyadic coordinates exact
     return _overlaps(table, gi, gj, rtol * scale, area_rtol * scale**2, grid, gap * scale)

@@ -111,15 +111,22 @@ def check_tolerance(name, value) -> float:
 
 
 class FacetTable:
-    """The facets of every block in world coordinates, concatenated block after block."""
+    """The facets of every block (or of the blocks ``needed``) in world coordinates, concatenated block after block.
 
-    def __init__(self, assembly: Assembly, atol: float, angle_tol: float):
+    Blocks that are not needed have no facets in the table.
+    """
+
+    def __init__(self, assembly: Assembly, atol: float, angle_tol: float, needed=None):
         types = assembly.types
+        wanted = np.ones(len(types), dtype=bool)
+        if needed is not None:
+            wanted = np.zeros(len(types), dtype=bool)
+            wanted[np.asarray(needed, dtype=int)] = True
         per_type = {}
-        for t in np.unique(types):
+        for t in np.unique(types[wanted]):
             mesh = merged(assembly.meshes[t])
             per_type[t] = _facets(mesh, atol, angle_tol)
-        counts = np.array([len(per_type[t]) for t in types])
+        counts = np.array([len(per_type[t]) if w else 0 for t, w in zip(types, wanted)], dtype=int)
         self.start = np.concatenate([[0], np.cumsum(counts)])
         total = self.start[-1]
         self.block = np.repeat(np.arange(len(types)), counts)
@@ -131,7 +138,7 @@ class FacetTable:
         mirrored = assembly.mirrored
         for t, f in per_type.items():
             for mirror in (False, True):
-                blocks = np.flatnonzero((types == t) & (mirrored == mirror))
+                blocks = np.flatnonzero((types == t) & (mirrored == mirror) & wanted)
                 if not len(blocks):
                     continue
                 rows = (self.start[blocks][:, None] + np.arange(len(f))).ravel()
