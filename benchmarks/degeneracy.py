@@ -56,9 +56,12 @@ into one plane; ``check`` then says "inconclusive" and names the contacts
 whose faces are planar only within tolerance, and ``certify=True`` has
 nothing to certify.  With contact tolerances tight enough to keep the bend,
 the rank is inconclusive down to about 1e-8 and below that ``rank_rtol`` =
-1e-9 calls the vanishing singular value zero: those rows are wrong at
-1e-9 ... 1e-11, and ``certify=True`` confirms them by finite steps whose
-overlap is below its volume tolerance.  ``periodic_check`` (which does not yet
+1e-9 calls the vanishing singular value zero; the sliding motion it gives
+crosses a face that the default contact search sees bent, so ``check``
+(which judges motions found on given contacts against that search,
+:mod:`interlock.verify.admissible`) says inconclusive.  In family E the
+contacts found below the noise miss touching faces; the same judgement
+turns the motions of parts left without contacts into inconclusive answers.  ``periodic_check`` (which does not yet
 look at bent contacts) and ``criterion_4_3`` (which counts points within
 1e-9 of the edge's line as on it) are wrong below 1e-4 and 1e-9.  Below about
 1e-15, a few units in the last place of the coordinates, the input itself no
