@@ -33,7 +33,7 @@ import scipy.sparse as sp
 from interlock.verify.check import SOLVER_THREADS
 from interlock.verify.statics.cra_local import ACTIVE_TOL, SLIDE_TOL
 
-__all__ = ["LARGE_VERTICES", "CHECK_RTOL", "most_work", "exact", "decide_large"]
+__all__ = ["LARGE_VERTICES", "CHECK_RTOL", "most_work", "exact", "carries", "decide_large"]
 
 #: Contact vertices above which :func:`~interlock.verify.statics.cra.cra` takes this route (the shelves of
 #: Fig. 7 and 12 have 60-90, the 36-voussoir arch 148, the armadillo vault 10,000-12,000).
@@ -108,18 +108,44 @@ def exact(problem, b_eq, motion):
     return forces
 
 
+def carries(problem, b_eq, closed: np.ndarray) -> bool | None:
+    """Whether the vertices ``closed`` alone can carry the load with friction anywhere in the pyramid (RBE
+    restricted to them, Clarabel); ``None`` if Clarabel does not decide.  A motion realising an equilibrium
+    must close at least the vertices of one such set, so ``False`` says why a motion closing only these fails."""
+    system = problem.system
+    m = int(closed.sum())
+    if not m:
+        return False
+    columns = np.flatnonzero(np.repeat(closed, 3))
+    a_ub = system.a_ub[:, columns]
+    a_ub = a_ub[np.flatnonzero(np.diff(a_ub.tocsr().indptr) > 0)]
+    normal = sp.csr_matrix((-np.ones(m), (np.arange(m), 3 * np.arange(m))), shape=(m, 3 * m))
+    constraints = sp.vstack([system.a_eq[:, columns], a_ub, normal], format="csc")
+    right = np.concatenate([b_eq, np.zeros(constraints.shape[0] - len(b_eq))])
+    import clarabel
+
+    settings = clarabel.DefaultSettings()
+    settings.verbose = False
+    settings.max_threads = SOLVER_THREADS
+    cones = [clarabel.ZeroConeT(len(b_eq)), clarabel.NonnegativeConeT(constraints.shape[0] - len(b_eq))]
+    status = str(clarabel.DefaultSolver(sp.csc_matrix((3 * m, 3 * m)), np.tile([1.0, 0.0, 0.0], m), constraints,
+                                        right, cones, settings).solve().status)
+    return True if status == "Solved" else False if status == "PrimalInfeasible" else None
+
+
 def decide_large(problem, b_eq, binaries: int, timings: dict):
     """``(status, forces, motion, message)`` for a large model (see the module docstring); forces in units of
     the free blocks' weight, the motion in units of ``eps``.  ``binaries``: the MILP's size, for the message."""
     started = time.perf_counter()
     motion, _ = most_work(problem, b_eq)
     found = None
-    active = 0
+    active, closed = 0, None
     if motion is not None:
         dd = (problem.kinematic @ motion).reshape(-1, 3)
         active = int(np.count_nonzero(np.abs(dd) >= problem.ratio * (1 - 1e-6)))
         snapped = motion.copy()
         near = dd[:, 0] + 1.0 <= SNAP
+        closed = near
         if near.any():  # close the nearly closed vertices exactly: least-squares step along their rows
             rows = problem.kinematic[0::3][near]
             step = sp.linalg.lsqr(rows, -1.0 - rows @ motion, atol=1e-14, btol=1e-14, iter_lim=5000)[0]
@@ -129,13 +155,21 @@ def decide_large(problem, b_eq, binaries: int, timings: dict):
             if forces is not None:
                 found = (candidate, forces)
                 break
-    timings["lp"] = timings.get("lp", 0.0) + time.perf_counter() - started
     if found is not None:
+        timings["lp"] = timings.get("lp", 0.0) + time.perf_counter() - started
         motion, forces = found
         return "stable", forces, motion, "equilibrium realised by the motion of most work (large model; exact check)"
-    why = ("the motion of most work does not realise an equilibrium: the bound eta is active at "
-           f"{active} displacement components, where its multipliers are forces at slides of eta that (11) "
-           "does not allow" if motion is not None else "the LP of most work did not solve")
+    if motion is None:
+        why = "the LP of most work did not solve"
+    else:
+        carried = carries(problem, b_eq, closed)
+        why = (f"the motion of most work does not realise an equilibrium (the bound eta is active at {active} "
+               f"displacement components, where its multipliers are forces at slides of eta that (11) does not "
+               f"allow; the {int(closed.sum())} vertices it closes "
+               + {False: "cannot carry the load even with friction anywhere in the cone",
+                  True: "could carry the load, but not with friction against its slides",
+                  None: "were not decided to carry the load"}[carried] + ")")
+    timings["lp"] = timings.get("lp", 0.0) + time.perf_counter() - started
     return ("inconclusive", None, None,
             f"RBE has an equilibrium (necessary, not sufficient); {why}; the MILP relaxation would have "
             f"{binaries} binaries, beyond the exact route (the shelf's 380 are undecided in 10 min); a local "
