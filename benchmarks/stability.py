@@ -26,7 +26,14 @@ checked to agree on one case by rotating our assembly too.
 Times are per solve with the contacts given (upstream: interfaces computed),
 the median of several, BLAS on one thread; ratio = upstream / ours.  Targets:
 a wedge solve ≤ 50 ms, the 38-block arch ≤ 1 s, RBE on the 399-block
-armadillo vault ≤ 10 s.
+armadillo vault ≤ 10 s, CRA on it ≤ 60 s (issue 24).
+
+The armadillo (CRA paper, Table 5: stable, CRA 2,424 s) is solved with our
+default interfaces (:func:`~interlock.verify.statics.interfaces.interfaces`),
+with exact contacts and with upstream's ``tmax``; upstream's ``cra_solve`` is
+stopped after :data:`ARMADILLO_CRA_LIMIT` seconds.  ``cra_scaling`` records CRA's
+time per upright solve against the block count (wedges, H, A, shelves, cubes,
+bridge, arch, armadillo), ours and upstream, for the chart's second panel.
 """
 
 from __future__ import annotations
@@ -47,6 +54,7 @@ from interlock.blocks import load_compas
 from interlock.blocks.compas import UPSTREAM_SUPPORTS
 from interlock.verify import check, contacts
 from interlock.verify.statics import TILT_AXES, rbe, tilted_gravity
+from interlock.verify.statics.interfaces import interfaces
 
 DATA = REFERENCE_DATA / "compas_cra"
 #: Table 2 of the CRA paper: critical tilt (degrees) by (wedge, axis), as (3DEC, CRA, RBE) at mu 0.20 and 0.84.
@@ -73,11 +81,15 @@ TENSION_RTOL = 1e-3
 COARSE = {"nmax": 10, "amin": 1e-2, "tmax": 1e-2}
 FINE = {"amin": 1e-6, "tmax": 1e-4}
 #: Timing targets (seconds) of issue 9.
-TARGETS = {"wedge solve": 0.05, "38-block arch": 1.0, "armadillo RBE": 10.0}
+TARGETS = {"wedge solve": 0.05, "38-block arch": 1.0, "armadillo RBE": 10.0, "armadillo CRA": 60.0}
 #: Upstream's interface detection for the armadillo (absolute, model units), and the angle our contacts allow.
 ARMADILLO_TMAX, ARMADILLO_AMIN, ARMADILLO_ANGLE = 0.05, 1e-4, 0.2
 #: Seconds after which our RBE on the armadillo with upstream's gap is stopped (10 x the target).
 ARMADILLO_LIMIT = 100.0
+#: Seconds after which upstream's cra_solve on the armadillo is stopped (the paper: 2,424 s, Table 5).
+ARMADILLO_CRA_LIMIT = 1800.0
+#: The CRA paper's time for the armadillo (Table 5, seconds).
+ARMADILLO_PAPER_CRA = 2424.0
 
 
 @dataclass
@@ -157,7 +169,8 @@ def run(quick: bool = False) -> dict:
         for case in cases(quick):
             rows.append(_run_case(case, angles, ours_cra, cra_limit, upstream))
         equivalence = _tilt_equivalence(angles, rows)
-        timing, targets = _timing(rows, repeats, ours_cra, cra_limit, upstream, quick, notes)
+        scaling = []
+        timing, targets = _timing(rows, repeats, ours_cra, cra_limit, upstream, quick, notes, scaling)
     payload = {
         "benchmark": "stability side by side with compas_cra",
         "quick": quick,
@@ -177,6 +190,8 @@ def run(quick: bool = False) -> dict:
         "tilt_equivalence": equivalence,
         "timing": timing,
         "targets": targets,
+        "cra_scaling": scaling,
+        "armadillo": dict(_ARMADILLO),
         "notes": notes,
     }
     _print_summary(payload)
@@ -342,8 +357,9 @@ def _seconds(fn) -> float:
     return time.perf_counter() - start
 
 
-def _timing(rows, repeats, ours_cra, cra_limit, upstream, quick, notes):
-    """Timing rows (ours vs upstream, median per solve) and the issue's targets."""
+def _timing(rows, repeats, ours_cra, cra_limit, upstream, quick, notes, scaling):
+    """Timing rows (ours vs upstream, median per solve) and the issue's targets; ``scaling`` receives CRA's
+    upright solves by block count."""
     table, targets = [], []
     scan = [r for row in rows if row["axis"] for r in row["verdicts"]]
     for method in ("rbe", "cra"):
@@ -386,8 +402,13 @@ def _timing(rows, repeats, ours_cra, cra_limit, upstream, quick, notes):
                         if up is not None else (None, 0))
             table.append(_timing_row(f"{row['name'].replace(' x ', ' ')} upright, {method}", method, ours_s[0],
                                      theirs_s[0], ours_s[1], theirs_s[1]))
-    targets += _arch(repeats, ours_cra, upstream, quick, table, notes)
-    targets += _armadillo(repeats, upstream, quick, table, notes)
+            if method == "cra":
+                upright = row["verdicts"][0]
+                scaling.append({"case": row["name"].replace(" x ", " "), "blocks": row["blocks"],
+                                "ours_seconds": ours_s[0], "ours": upright.get("cra"),
+                                "upstream_seconds": theirs_s[0], "upstream": upright.get("upstream_cra")})
+    targets += _arch(repeats, ours_cra, upstream, quick, table, notes, scaling)
+    targets += _armadillo(repeats, upstream, ours_cra, quick, table, notes, scaling)
     return table, targets
 
 
@@ -405,7 +426,7 @@ def _target(name, what, seconds, timed_out: bool = False) -> dict:
             "met": False if timed_out else None if seconds is None else bool(seconds <= limit)}
 
 
-def _arch(repeats, ours_cra, upstream, quick, table, notes) -> list:
+def _arch(repeats, ours_cra, upstream, quick, table, notes, scaling) -> list:
     try:
         from interlock.blocks import semicircular_arch
     except ImportError:
@@ -429,41 +450,66 @@ def _arch(repeats, ours_cra, upstream, quick, table, notes) -> list:
         theirs = _median_seconds(lambda: _upstream_solve(upstream, "cra", up, None, mu=mu), repeats)[0] \
             if up else None
         table.append(_timing_row(f"arch {len(arch)} blocks upright, cra", "cra", cra_s, theirs))
+        said = _cra_verdict(ours_cra, arch, mu, 1.0, (0, 0, -1), found, None)
+        scaling.append({"case": f"arch ({len(arch) - 2} voussoirs)", "blocks": len(arch), "ours_seconds": cra_s,
+                        "ours": said, "upstream_seconds": theirs,
+                        "upstream": _upstream_solve(upstream, "cra", up, None, mu=mu)[0] if up else None})
         out.append(_target("38-block arch", f"our cra, {len(arch)} blocks, contacts + solve", contact_seconds + cra_s))
     return out
 
 
-def _armadillo(repeats, upstream, quick, table, notes) -> list:
-    """RBE on the 399-block armadillo vault: our default contacts, upstream's gap (in a child, capped), upstream."""
+def _armadillo(repeats, upstream, ours_cra, quick, table, notes, scaling) -> list:
+    """The 399-block armadillo vault (Table 5): contacts, RBE and CRA, ours with the default interfaces, exact
+    contacts and upstream's gap; upstream's rbe_solve and cra_solve (stopped after ARMADILLO_CRA_LIMIT)."""
     if quick:
         return []
     assembly = load_compas(DATA / "armadillo.json")
     rows = {}
 
-    def ours(options):
+    def ours(find):
         start = time.perf_counter()
-        found = contacts(assembly, **options)
+        found = find()
         middle = time.perf_counter()
-        stable = bool(rbe(assembly, 0.84, contacts=found).stable)
-        return {"contacts": len(found), "contact_seconds": middle - start,
-                "rbe_seconds": time.perf_counter() - middle, "stable": stable}
+        result = rbe(assembly, 0.84, contacts=found)
+        return {"contacts": len(result.contacts), "contact_seconds": middle - start,
+                "rbe_seconds": time.perf_counter() - middle, "stable": bool(result.stable),
+                "friction_utilisation": float(result.friction_utilisation) if result.stable else None}
 
-    rows["default contacts"] = ours({})
-    if "gap" in inspect.signature(contacts).parameters:
-        # upstream's absolute tmax and amin relative to the model size; it tests no angle, and the armadillo's
-        # facing faces are up to 0.16 rad apart (tests/verify/test_contacts.py)
-        options = {"gap": ARMADILLO_TMAX / assembly.scale, "area_rtol": ARMADILLO_AMIN / assembly.scale ** 2,
-                   "angle_tol": ARMADILLO_ANGLE}
-        rows["upstream's gap"] = _capped(lambda: ours(options), ARMADILLO_LIMIT) or {"timed_out": ARMADILLO_LIMIT}
-        notes.append(f"armadillo contacts with gap={options['gap']:.4g} (upstream tmax {ARMADILLO_TMAX} / scale), "
-                     f"area_rtol={options['area_rtol']:.3g} (amin {ARMADILLO_AMIN}), angle_tol={ARMADILLO_ANGLE}; "
-                     f"our RBE stopped after {ARMADILLO_LIMIT:.0f} s if unfinished")
-    else:
-        notes.append("armadillo contacts with default tolerances only: contacts() has no gap parameter yet")
+    # our defaults: the interfaces of every pair (docs/statics.md, "Interfaces"), timed as medians
+    found = interfaces(assembly)
+    interface_s, interface_runs = _median_seconds(lambda: interfaces(assembly), min(repeats, 3), slow=30.0)
+    rbe_result = rbe(assembly, 0.84, contacts=found)
+    rbe_s, rbe_runs = _median_seconds(lambda: rbe(assembly, 0.84, contacts=found), min(repeats, 3), slow=30.0)
+    default = {"contacts": len(rbe_result.contacts), "pairs": found.to_dict()["pairs"],
+               "contact_seconds": interface_s, "contact_runs": interface_runs, "rbe_seconds": rbe_s,
+               "rbe_runs": rbe_runs, "stable": bool(rbe_result.stable),
+               "friction_utilisation": float(rbe_result.friction_utilisation), "interfaces": found.to_dict()}
+    if ours_cra is not None:
+        said = {}
+
+        def solve_cra():
+            said["result"] = ours_cra(assembly, 0.84, contacts=found)
+        default["cra_seconds"], default["cra_runs"] = _median_seconds(solve_cra, min(repeats, 3), slow=120.0)
+        result = said["result"]
+        default["cra"] = result.status
+        default["cra_message"] = result.message
+        default["cra_timings"] = {k: v for k, v in result.timings.items() if k != "contacts"}
+    rows["default interfaces"] = default
+    rows["exact contacts"] = ours(lambda: contacts(assembly))
+    # upstream's absolute tmax and amin relative to the model size; it tests no angle, and the armadillo's
+    # facing faces are up to 0.16 rad apart (tests/verify/test_contacts.py)
+    options = {"gap": ARMADILLO_TMAX / assembly.scale, "area_rtol": ARMADILLO_AMIN / assembly.scale ** 2,
+               "angle_tol": ARMADILLO_ANGLE}
+    rows["upstream's gap"] = _capped(lambda: ours(lambda: contacts(assembly, **options)), ARMADILLO_LIMIT) \
+        or {"timed_out": ARMADILLO_LIMIT}
+    notes.append(f"armadillo contacts with gap={options['gap']:.4g} (upstream tmax {ARMADILLO_TMAX} / scale), "
+                 f"area_rtol={options['area_rtol']:.3g} (amin {ARMADILLO_AMIN}), angle_tol={ARMADILLO_ANGLE}; "
+                 f"our RBE stopped after {ARMADILLO_LIMIT:.0f} s if unfinished")
     for name, row in rows.items():
-        notes.append(f"armadillo ours ({name}): " + ", ".join(f"{k} {v:.3g}" if isinstance(v, float) else f"{k} {v}"
-                                                             for k, v in row.items()))
-    theirs = None
+        notes.append(f"armadillo ours ({name}): " + ", ".join(
+            f"{k} {v:.3g}" if isinstance(v, float) else f"{k} {v}" for k, v in row.items()
+            if not isinstance(v, dict) and k != "cra_message"))
+    theirs, upstream_record = None, None
     if upstream is not None:
         case = Case("armadillo", "armadillo", 0.84, interfaces={"tmax": ARMADILLO_TMAX, "amin": ARMADILLO_AMIN})
         start = time.perf_counter()
@@ -475,8 +521,25 @@ def _armadillo(repeats, upstream, quick, table, notes) -> list:
             said["rbe"] = _upstream_solve(upstream, "rbe", up, None, mu=0.84)
         theirs = _median_seconds(solve, min(repeats, 3), slow=30.0)[0]
         count = sum(len(up.graph.edge_attribute(e, "interfaces")) for e in up.graph.edges())
+
+        def solve_cra():
+            start = time.perf_counter()
+            stable, message = _upstream_solve(upstream, "cra", up, None, mu=0.84)
+            return {"stable": stable, "message": message, "seconds": time.perf_counter() - start}
+        cra_record = _capped(solve_cra, ARMADILLO_CRA_LIMIT) or {"timed_out": ARMADILLO_CRA_LIMIT}
+        upstream_record = {"interfaces": count, "pairs": up.graph.number_of_edges(),
+                           "interface_seconds": interface_seconds, "rbe_seconds": theirs,
+                           "rbe_stable": said["rbe"][0], "cra": cra_record}
         notes.append(f"armadillo upstream: {count} interfaces ({up.graph.number_of_edges()} pairs) in "
-                     f"{interface_seconds:.1f} s, rbe_solve stable={said['rbe'][0]} ({said['rbe'][1]})")
+                     f"{interface_seconds:.1f} s, rbe_solve stable={said['rbe'][0]} ({said['rbe'][1]}); "
+                     f"cra_solve: {cra_record}")
+    scaling.append({"case": "armadillo (Table 5)", "blocks": len(assembly),
+                    "ours_seconds": default.get("cra_seconds"),
+                    "ours": {"stable": True, "unstable": False}.get(default.get("cra")),
+                    "upstream_seconds": (upstream_record["cra"].get("seconds") if upstream_record else None),
+                    "upstream": (upstream_record["cra"].get("stable") if upstream_record else None),
+                    "upstream_timed_out": bool(upstream_record and "timed_out" in upstream_record["cra"]),
+                    "paper_seconds": ARMADILLO_PAPER_CRA})
     target = []
     for name, row in rows.items():
         seconds = row["rbe_seconds"] if "rbe_seconds" in row else None
@@ -488,7 +551,22 @@ def _armadillo(repeats, upstream, quick, table, notes) -> list:
                    else f", says {'stable' if row['stable'] else 'unstable'}")
         target.append(_target("armadillo RBE", f"our contacts + rbe, {len(assembly)} blocks, {name}{verdict}", total,
                               timed_out=total is None))
+    if "cra_seconds" in default:
+        up_cra = upstream_record["cra"] if upstream_record else {}
+        table.append(_timing_row(f"armadillo {len(assembly)} blocks, cra, ours with default interfaces "
+                                 f"({default['cra']}); upstream cra_solve"
+                                 + (f" stopped after {ARMADILLO_CRA_LIMIT:.0f} s" if "timed_out" in up_cra else ""),
+                                 "cra", default["cra_seconds"], up_cra.get("seconds")))
+        target.append(_target("armadillo CRA", f"our interfaces + cra, {len(assembly)} blocks, says "
+                              f"{default['cra']}", default["cra_seconds"] + default["contact_seconds"]))
+    _ARMADILLO.clear()
+    _ARMADILLO.update({"ours": rows, "upstream": upstream_record, "paper_cra_seconds": ARMADILLO_PAPER_CRA,
+                       "mu": 0.84, "blocks": len(assembly), "supports": len(assembly.frame)})
     return target
+
+
+#: The armadillo's record, filled by :func:`_armadillo` for the payload.
+_ARMADILLO: dict = {}
 
 
 def _capped(fn, seconds: float):
@@ -641,8 +719,16 @@ def _chart(payload) -> None:
         methods += [("upstream_rbe", "compas_cra rbe_solve"), ("upstream_cra", "compas_cra cra_solve")]
     claims = any(r.get("interlocked") for row in rows for r in row["verdicts"])
     widths = [1.0 if method != "interlocked" or claims else 0.45 for method, _ in methods]
-    fig, axes = plt.subplots(1, len(methods), figsize=(3.0 * sum(widths) + 2.2, 0.26 * len(rows) + 2.2),
-                             sharey=True, squeeze=False, gridspec_kw={"width_ratios": widths})
+    scaling = [r for r in payload.get("cra_scaling", []) if r.get("ours_seconds") or r.get("upstream_seconds")]
+    grid_height = 0.26 * len(rows) + 2.2
+    panel = 3.6 if scaling else 0.0
+    figure = plt.figure(figsize=(3.0 * sum(widths) + 2.2, grid_height + panel))
+    if scaling:
+        fig, lower = figure.subfigures(2, 1, height_ratios=[grid_height, panel])
+        _scaling_panel(lower, scaling)
+    else:
+        fig = figure
+    axes = fig.subplots(1, len(methods), sharey=True, squeeze=False, gridspec_kw={"width_ratios": widths})
     for ax, (method, title) in zip(axes[0], methods):
         for i, row in enumerate(rows):
             for r in row["verdicts"]:
@@ -688,9 +774,51 @@ def _chart(payload) -> None:
                       for m, a in agreement.items() if a["compared"]) or "compas_cra not installed: ours only"
     fig.suptitle("Stability verdicts on the CRA paper's assemblies (rows) by tilt (Table 2 axes). "
                  f"Reference: 3DEC / the paper. {agree}", fontsize=9, x=0.01, ha="left")
-    fig.tight_layout(rect=(0, 0.07, 1, 0.97))
-    fig.savefig(results_folder() / "stability.png", dpi=120)
-    plt.close(fig)
+    fig.subplots_adjust(left=0.12, right=0.99, bottom=0.07 + 1.2 / grid_height, top=1 - 0.5 / grid_height,
+                        wspace=0.08)
+    figure.savefig(results_folder() / "stability.png", dpi=120)
+    plt.close(figure)
+
+
+def _scaling_panel(sub, scaling) -> None:
+    """CRA time per upright solve against the number of blocks, ours and compas_cra (the armadillo: stopped,
+    and the paper's 2,424 s)."""
+    ax = sub.subplots(1, 1)
+    marks = {True: "o", False: "s", None: "D"}
+    for key, colour, label in (("ours", STABLE, "our cra"), ("upstream", UNSTABLE, "compas_cra cra_solve")):
+        points = [(r["blocks"], r[f"{key}_seconds"], r.get(key), r) for r in scaling if r.get(f"{key}_seconds")]
+        for said in (True, False, None):
+            chosen = [(b, t) for b, t, v, _ in points if v is said]
+            if chosen:
+                xs, ys = zip(*chosen)
+                word = {True: "stable", False: "unstable", None: "inconclusive"}[said]
+                ax.scatter(xs, ys, color=colour, marker=marks[said], s=28, label=f"{label}: {word}",
+                           edgecolor="black", linewidth=0.4)
+        for b, t, _, r in points:
+            if key == "upstream" and r.get("upstream_timed_out"):
+                ax.annotate("stopped", (b, t), textcoords="offset points", xytext=(6, -3), fontsize=7)
+    for r in scaling:
+        if r.get("paper_seconds"):
+            ax.scatter([r["blocks"]], [r["paper_seconds"]], marker="*", s=90, color="#009E73",
+                       edgecolor="black", linewidth=0.4, label="the CRA paper (Table 5, IPOPT)")
+    named = {}
+    for r in scaling:
+        named.setdefault(r["blocks"], r["case"].split(" μ")[0])
+    for blocks, name in named.items():
+        ax.annotate(name, (blocks, 1e-3), textcoords="offset points",
+                    xytext=(0, 2), fontsize=6, rotation=90, ha="center", va="bottom", color="#555555")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlim(2, 1500)
+    ax.set_ylim(1e-3, 1e4)
+    ax.set_xlabel("blocks (log)", fontsize=8)
+    ax.set_ylabel("seconds per CRA solve (log)", fontsize=8)
+    ax.tick_params(labelsize=7)
+    ax.grid(True, which="major", color="#DDDDDD", lw=0.5)
+    ax.legend(fontsize=7, loc="upper left", frameon=False, ncol=2)
+    ax.set_title("CRA time against block count (upright; wedges, H, A, shelves, cubes, bridge, arch, armadillo)",
+                 fontsize=9)
+    sub.subplots_adjust(left=0.12, right=0.99, bottom=0.2, top=0.86)
 
 
 if __name__ == "__main__":
