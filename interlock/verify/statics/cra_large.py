@@ -4,7 +4,7 @@
 MILP with a binary per vertex and sector, and an exact LP at a motion.  Past
 :data:`LARGE_VERTICES` contact vertices the per-vertex LPs that bound the MILP
 (two per vertex), the MILP itself (the shelf's 380 binaries are undecided in
-10 minutes; the armadillo vault would have 50,000) and the dense local solvers
+10 minutes; the armadillo vault would have 54,505) and the dense local solvers
 are out of reach, and HiGHS' simplex takes about a minute per LP.  Here:
 
 1. RBE by Clarabel (:class:`~interlock.verify.statics.equilibrium.EquilibriumSystem`):
