@@ -36,7 +36,7 @@ from interlock.verify.statics.cra_local import ACTIVE_TOL, SLIDE_TOL
 __all__ = ["LARGE_VERTICES", "CHECK_RTOL", "most_work", "exact", "carries", "decide_large"]
 
 #: Contact vertices above which :func:`~interlock.verify.statics.cra.cra` takes this route (the shelves of
-#: Fig. 7 and 12 have 60-90, the 36-voussoir arch 148, the armadillo vault 10,000-12,000).
+#: Fig. 7 and 12 have 60-90, the 36-voussoir arch 148, the armadillo vault 10,901).
 LARGE_VERTICES = 2000
 #: An interior-point solution of the exact LP is accepted when every residual of (11) at the motion
 #: (equilibrium, ``f_n >= 0``, ``alpha >= 0``, the friction pyramid) is at most this times the load
