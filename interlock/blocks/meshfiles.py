@@ -21,7 +21,7 @@ from interlock.blocks.repair import (closed_groups, group_meshes, split_t_juncti
 from interlock.errors import AssemblyError
 
 __all__ = ["MeshFile", "read_mesh_file", "file_header", "HEADER_MARKER", "STL_RECORD", "BLOCK_DATA",
-           "FIXED_DATA", "FIXED_WORD", "STL_FIXED_BIT", "STL_MAX_FRAMED"]
+           "FIXED_DATA", "FIXED_WORD", "STL_FIXED_BIT", "STL_MAX_FRAMED", "OBJ_SECOND_LINE"]
 
 #: How an exported file says that it holds interlock blocks, and how many: the start of a binary STL's
 #: 80-byte header, a PLY or OBJ comment, GLB scene extras, 3MF model metadata (see :func:`file_header`).
@@ -40,6 +40,9 @@ STL_FIXED_BIT = 1 << 15
 #: The most blocks a binary STL stores with their frame: block indices below :data:`STL_FIXED_BIT`.
 STL_MAX_FRAMED = STL_FIXED_BIT
 
+#: How the second line of an OBJ export starts (after its :func:`file_header`): a file with it and without a
+#: readable header is damaged.
+OBJ_SECOND_LINE = "# one object per block, named 'fixed' in the frame"
 _HEADER = re.compile(re.escape(HEADER_MARKER.decode()) + r"(\d+)(?: fixed=(\d+))?(?: triangles=(\d+))?")
 
 
@@ -461,7 +464,12 @@ def _parse_obj(path: Path) -> _Obj:
     last line is dropped (a file cut short); elsewhere it is an error.
     """
     lines = path.read_text(errors="replace").splitlines()
-    announced = next(filter(None, (_announced(line) for line in lines[:20] if line.startswith("#"))), None)
+    # the header comment, also when damaged (a header that is not read would let a cut-short file pass)
+    announced = next(filter(None, (_announced(line) for line in lines[:20] if not line.startswith(("v", "f")))),
+                     None)
+    if announced is None and any(line.startswith(OBJ_SECOND_LINE) for line in lines[:20]):
+        raise AssemblyError(f"{path} was written by interlock but its header ('# interlock blocks=N ...') is "
+                            "damaged, so it cannot tell whether it is whole; export it again")
     rows, polygons, seen, objects, runs, names = [], [], [], [], [], [""]
     run, after_face = 0, False
     last = max((k for k, line in enumerate(lines) if line.strip()), default=-1)

@@ -16,8 +16,8 @@ from trimesh.visual import TextureVisuals
 from trimesh.visual.material import PBRMaterial
 
 from interlock.blocks.assembly import Assembly
-from interlock.blocks.meshfiles import (BLOCK_DATA, FIXED_DATA, FIXED_WORD, STL_FIXED_BIT, STL_MAX_FRAMED,
-                                       STL_RECORD, file_header)
+from interlock.blocks.meshfiles import (BLOCK_DATA, FIXED_DATA, FIXED_WORD, OBJ_SECOND_LINE, STL_FIXED_BIT,
+                                       STL_MAX_FRAMED, STL_RECORD, file_header)
 from interlock.errors import GalleryError
 from interlock.files import atomic_write, write_atomically
 from interlock.gallery import appearance
@@ -257,7 +257,7 @@ def _write_obj(assembly: Assembly, path: Path):
     frame = set(assembly.frame)
     with atomic_write(path) as temporary, open(temporary, "w") as file:
         file.write(f"# {_header(assembly, len(faces))}\n")
-        file.write(f"# one object per block, named 'fixed' in the frame; materials by {kind}\n")
+        file.write(f"{OBJ_SECOND_LINE}; materials by {kind}\n")
         file.write(f"mtllib {materials.name}\n")
         for i in range(len(assembly)):
             block_vertices = vertices[vertex_start[i]:vertex_start[i + 1]]

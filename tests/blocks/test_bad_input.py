@@ -71,3 +71,10 @@ def test_generators_refuse_more_blocks_than_their_limit_before_allocating():
     assert len(patch(block, 2.0, max_blocks=1000)) < 1000
     with pytest.raises(InterlockError, match="more than the limit of 10"):
         patch(block, 2.0, max_blocks=10)
+
+
+def test_an_obj_export_whose_header_is_damaged_is_refused(files):
+    text = (files / "half.obj").read_text()
+    (files / "no-header.obj").write_text(text.replace("interlock blocks=27", "interlock blocks~27", 1))
+    with pytest.raises(InterlockError, match="header .* is damaged, so it cannot tell whether it is whole"):
+        Assembly.load(files / "no-header.obj")
