@@ -821,5 +821,52 @@ def _scaling_panel(sub, scaling) -> None:
     sub.subplots_adjust(left=0.12, right=0.99, bottom=0.2, top=0.86)
 
 
+def run_armadillo() -> dict:
+    """Only the armadillo, into the recorded ``stability.json``: its rows, targets and notes are replaced, and
+    ``cra_scaling`` is rebuilt from the recorded upright CRA times (``python -m benchmarks.stability
+    --armadillo``; the whole run takes about an hour on 2 shared cores, half of it upstream's cra_solve)."""
+    import json
+
+    path = results_folder() / "stability.json"
+    payload = json.loads(path.read_text())
+    payload.pop("machine", None)  # write_json records this run's
+    upstream, _ = _upstream()
+    ours_cra, _ = _ours_cra()
+    scaling, notes, table = [], [], []
+    names = {row["name"]: row for row in payload["cases"]}
+    for row in payload["timing"]:
+        what = row["what"]
+        if what.endswith(" upright, cra"):
+            name = what[:-len(" upright, cra")]
+            case = next((r for n, r in names.items() if n.replace(" x ", " ") == name), None)
+            if case is not None:
+                upright = case["verdicts"][0]
+                scaling.append({"case": name, "blocks": case["blocks"], "ours_seconds": row["ours_seconds"],
+                                "ours": upright.get("cra"), "upstream_seconds": row["upstream_seconds"],
+                                "upstream": upright.get("upstream_cra")})
+            elif name.startswith("arch "):
+                scaling.append({"case": "arch (36 voussoirs)", "blocks": int(name.split()[1]),
+                                "ours_seconds": row["ours_seconds"], "ours": True,
+                                "upstream_seconds": row["upstream_seconds"], "upstream": True})
+    with limited_blas():
+        targets = _armadillo(5, upstream, ours_cra, False, table, notes, scaling)
+    payload["timing"] = [r for r in payload["timing"] if not r["what"].startswith("armadillo")] + table
+    payload["targets"] = [t for t in payload["targets"] if not t["target"].startswith("armadillo")] + targets
+    payload["notes"] = [n for n in payload["notes"] if not n.startswith("armadillo")] + notes + [
+        f"armadillo rows and cra_scaling re-run alone (run_armadillo) at {time.strftime('%Y-%m-%d %H:%M')}; "
+        "the other rows are from the last whole run"]
+    payload["cra_scaling"] = scaling
+    payload["armadillo"] = dict(_ARMADILLO)
+    write_json("stability", payload)
+    _chart(payload)
+    return payload
+
+
 if __name__ == "__main__":
-    main(run, __doc__)
+    import sys
+
+    if "--armadillo" in sys.argv:
+        sys.argv.remove("--armadillo")
+        main(lambda quick: run_armadillo(), __doc__)
+    else:
+        main(run, __doc__)
