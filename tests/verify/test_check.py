@@ -60,7 +60,7 @@ def test_figure_5a_tetrahedra_with_a_p4_frame_interlock():
 def test_tetrahedra_framed_by_the_ring_alone_slide_only_to_first_order():
     # face contacts admit a sliding of the inner blocks, but edge contacts (not modelled,
     # Remark 3.11) block it: no finite step confirms it, so the verdict claims no real motion
-    layer = presets.tetrahedra("p4", radius=1.0)
+    layer = presets.tetrahedra("p4", radius=1.0, frame="boundary")
     v = check(layer)
     assert v.interlocked is False and v.motion_kind == "sliding"
     from interlock.verify.certify import _finite_steps
