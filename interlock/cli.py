@@ -32,6 +32,9 @@ def main(argv: list[str] | None = None) -> int:
     except InterlockError as error:
         print(f"interlock {args.command}: error: {_one_line(error)}", file=sys.stderr)
         return EXIT_BAD_INPUT
+    except BrokenPipeError:  # the reader of our output went away (``interlock verify x.stl | head``)
+        sys.stderr.close()
+        return 141
     except OSError as error:  # a file the checks could not foresee (permissions, a full disk, ...)
         where = f" {error.filename}" if error.filename else ""
         print(f"interlock {args.command}: error:{where}: {error.strerror or error}", file=sys.stderr)
@@ -181,6 +184,22 @@ def _parser() -> argparse.ArgumentParser:
                        help="refuse a spec with more points than N (default 1,000,000)")
     sweep.set_defaults(run=_run_sweep)
 
+    convert = commands.add_parser(
+        "convert", help="convert an assembly between file formats, keeping its blocks, frame and names",
+        description="Read an assembly (one file holding every block) and write it in the format of OUT's suffix: "
+                    f"{', '.join(OUTPUT_SUFFIXES)}.  The frame is --fixed if given, else the one IN stores; "
+                    "labels, classes and the assembly's info travel where the format can hold them "
+                    "(3dm: object names, layers and user text; COMPAS JSON: node attributes).",
+        epilog="examples:\n  interlock convert p4.stl p4.3dm\n  interlock convert armadillo.json armadillo.glb\n"
+               "  interlock convert vault.3dm vault.json --fixed 0-7",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    convert.add_argument("source", metavar="IN", help=f"an assembly file: {MESH_FORMATS}")
+    convert.add_argument("target", metavar="OUT", help=f"the file to write: {', '.join(OUTPUT_SUFFIXES)}")
+    convert.add_argument("--fixed", default=None, metavar="LIST",
+                         help="frame: block indices, e.g. 0,1 or 0-3,7 (default: the frame IN stores)")
+    convert.set_defaults(run=_run_convert)
+
     generate = commands.add_parser("generate", help="generate an assembly and write it (format by suffix)")
     kinds = generate.add_subparsers(dest="kind", metavar="KIND", required=True)
     escher = kinds.add_parser(
@@ -217,16 +236,18 @@ def _parser() -> argparse.ArgumentParser:
     return parser
 
 
-#: The mesh formats ``verify`` and ``stability`` read (interlock.blocks.meshfiles; any other that trimesh reads).
-MESH_FORMATS = ("OBJ, STL, PLY, GLB/GLTF, 3MF, OFF, VTU, XDMF (and other formats trimesh reads); "
-                "the files interlock generate writes keep their blocks and frame")
+#: The formats ``verify``, ``stability`` and ``convert`` read (interlock.blocks.meshfiles; any other trimesh reads).
+MESH_FORMATS = ("OBJ, STL, PLY, GLB/GLTF, 3MF, OFF, VTU, XDMF, Rhino 3DM, COMPAS assembly JSON (and other formats "
+                "trimesh reads); the files interlock generate writes keep their blocks and frame")
+#: The suffixes ``generate -o`` and ``convert`` write (interlock.gallery.export.FORMATS).
+OUTPUT_SUFFIXES = (".stl", ".obj", ".ply", ".glb", ".3mf", ".vtu", ".xdmf", ".3dm", ".json")
 #: Named periodic lozenge tilings for ``generate rhomblock --periodic``: their staircase counts.
 PERIODIC_KINDS = {"one-orientation": (1, 0, 0), "two-orientations": (1, 1, 0), "three-orientations": (1, 1, 1)}
 
 
 def _output_arguments(parser) -> None:
     parser.add_argument("-o", "--output", required=True, metavar="FILE",
-                        help="output file: .stl .obj .ply .glb .3mf .vtu .xdmf, or .png for a picture")
+                        help=f"output file: {' '.join(OUTPUT_SUFFIXES)}, or .png for a picture")
     parser.add_argument("--exploded", type=float, default=0.0, help="move blocks apart by this factor (default 0)")
     parser.add_argument("--max-blocks", type=int, default=None, metavar="N",
                         help="refuse to make more than N blocks (default 100,000; counted before anything is made)")
@@ -547,6 +568,22 @@ def _limit(args) -> dict:
     if args.max_blocks < 1:
         raise InterlockError(f"--max-blocks must be at least 1, got {args.max_blocks}")
     return {"max_blocks": args.max_blocks}
+
+
+def _run_convert(args) -> int:
+    from pathlib import Path
+
+    from interlock.blocks import Assembly
+    from interlock.gallery import export
+
+    if Path(args.target).suffix.lower() not in OUTPUT_SUFFIXES:
+        raise InterlockError(f"cannot write {args.target}: choose a suffix from {', '.join(OUTPUT_SUFFIXES)}")
+    if Path(args.source).resolve() == Path(args.target).resolve():
+        raise InterlockError(f"IN and OUT are the same file ({args.source}); write to another name")
+    assembly = Assembly.load(args.source, frame=None if args.fixed is None else _indices(args.fixed))
+    path = export(assembly, args.target)
+    print(f"wrote {path}: {len(assembly)} blocks, frame {_frame_text(assembly.frame, assembly.info.get('frame_from'))}")
+    return 0
 
 
 def _write(assembly, args) -> int:

@@ -8,7 +8,7 @@
 """
 
 from interlock.blocks.arch import semicircular_arch
-from interlock.blocks.assembly import Assembly, AssemblyError, load_compas
+from interlock.blocks.assembly import Assembly, AssemblyError, load_3dm, load_compas
 from interlock.blocks.escher import Block, DeformationError, escher_block
 from interlock.blocks import presets
 from interlock.blocks.lozenge import Lozenge, LozengeTiling, TilingError, random_hexagon, staircase
@@ -18,4 +18,4 @@ from interlock.blocks.rhomblock import rhomblock, rhomblock_assembly
 __all__ = ["Assembly", "AssemblyError", "Block", "DeformationError", "escher_block", "patch", "periodic_cell",
            "cell_patch", "cell_reach",
            "presets", "Lozenge", "LozengeTiling", "TilingError", "random_hexagon", "staircase", "rhomblock",
-           "rhomblock_assembly", "load_compas", "semicircular_arch"]
+           "rhomblock_assembly", "load_compas", "load_3dm", "semicircular_arch"]

@@ -15,11 +15,11 @@ import trimesh
 from interlock.blocks.compas import read_compas
 from interlock.blocks.meshfiles import BLOCK_DATA, HEADER_MARKER, STL_RECORD, read_mesh_file
 from interlock.blocks.repair import TJUNCTION_RTOL, split_t_junctions, unmatched_edges
+from interlock.blocks.rhino import FRAME_LAYER, read_3dm_blocks
 from interlock.errors import AssemblyError
 
-__all__ = ["Assembly", "AssemblyError", "load_compas", "NEIGHBOUR_RTOL", "RIGID_TOL", "KIND_DECIMALS", "HEADER_MARKER",
-           "STL_RECORD",
-           "BLOCK_DATA"]
+__all__ = ["Assembly", "AssemblyError", "load_compas", "load_3dm", "NEIGHBOUR_RTOL", "RIGID_TOL", "KIND_DECIMALS",
+           "HEADER_MARKER", "STL_RECORD", "BLOCK_DATA"]
 
 #: Bounding boxes closer than this (relative to the model size) count as touching.
 NEIGHBOUR_RTOL = 1e-6
@@ -101,7 +101,8 @@ class Assembly:
 
     @classmethod
     def load(cls, paths, frame=None) -> Assembly:
-        """Blocks from mesh files (OBJ, STL, PLY, GLB, 3MF, ... through trimesh; VTU, XDMF through meshio).
+        """Blocks from mesh files (OBJ, STL, PLY, GLB, 3MF, ... through trimesh; VTU, XDMF through meshio;
+        Rhino ``.3dm``, :func:`load_3dm`; COMPAS assembly ``.json``, :func:`load_compas`).
 
         ``paths`` is a sequence of files, one block each (labels: file names),
         or one file holding every block.  In one file the blocks are, in this order of preference:
@@ -160,6 +161,8 @@ class Assembly:
         (3, (), 'none', (0, 2), 'argument')
         """
         paths = _paths(paths)
+        if isinstance(paths, (str, Path)) and Path(paths).suffix.lower() == ".3dm":
+            return load_3dm(paths, frame)
         if isinstance(paths, (str, Path)) and Path(paths).suffix.lower() == ".json":  # COMPAS; frame: node keys
             assembly = load_compas(paths, supports=None if frame is None else list(frame))
             assembly.info["frame_from"] = assembly.info["supports_from"]
@@ -390,6 +393,70 @@ def load_compas(path, supports=None) -> Assembly:
     """
     meshes, labels, frame, info = read_compas(path, supports)
     return Assembly.from_meshes(meshes, frame=frame, labels=labels, info=info)
+
+
+def load_3dm(path, frame=None, *, frame_layer: str = FRAME_LAYER) -> Assembly:
+    """An assembly from a Rhino ``.3dm`` file: every closed mesh or closed polysurface is a block.
+
+    A file of :func:`~interlock.blocks.rhino.write_3dm` (or of ``export(..., "x.3dm")``)
+    comes back exactly: the blocks in their order with bit-identical vertices,
+    their labels (group elements, lozenges, ...), the frame and ``info``.  A file drawn by a person gives one block per
+    object, in file order, labelled by the object's name (else its id); the
+    objects on the layer ``frame_layer`` (or a sublayer of it; any case) are
+    the frame.
+
+    Objects may be meshes (vertices welded where they coincide), or
+    polysurfaces and extrusions: those Rhino saved with render meshes are read
+    through them; others with planar faces and straight edges (boxes, prisms,
+    anything faceted) are cut into polygons here.  rhino3dm cannot mesh curved
+    surfaces outside Rhino, so a curved polysurface saved without render
+    meshes is an error saying so.
+
+    Parameters
+    ----------
+    path : str or path-like
+    frame : iterable of int, optional
+        Indices of the fixed blocks, instead of the frame layer.
+    frame_layer : str
+        The name of the layer of fixed blocks.
+
+    Returns
+    -------
+    Assembly
+        ``info`` holds the written ``info`` (for files of :func:`write_3dm`),
+        ``source``, ``format`` (``"3dm"``) and ``frame_from`` (``"argument"``,
+        ``"file"`` or ``"none"``).
+
+    Raises
+    ------
+    ~interlock.blocks.rhino.RhinoError
+        (one line) if rhino3dm is missing, the file is missing, empty or not a
+        ``.3dm`` file, holds no objects, or an object is not a closed solid (an
+        open mesh, a curve, a point, text, ...; the message names the object).
+
+    Examples
+    --------
+    Two boxes drawn as a person would, the lower one on the ``frame`` layer:
+
+    >>> import rhino3dm, tempfile
+    >>> model = rhino3dm.File3dm()
+    >>> def box(z, layer_name):
+    ...     layer, attributes = rhino3dm.Layer(), rhino3dm.ObjectAttributes()
+    ...     layer.Name = layer_name
+    ...     attributes.LayerIndex = model.Layers.Add(layer)
+    ...     corners = rhino3dm.BoundingBox(0, 0, z, 1, 1, z + 1)
+    ...     return model.Objects.AddBrep(rhino3dm.Brep.CreateFromBox(rhino3dm.Box(corners)), attributes)
+    >>> _, _ = box(0, "frame"), box(1, "blocks")
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     _ = model.Write(str(Path(folder) / "stack.3dm"), 7)
+    ...     stack = load_3dm(Path(folder) / "stack.3dm")
+    >>> len(stack), stack.frame, stack.volumes.tolist(), stack.info["frame_from"]
+    (2, (0,), [1.0, 1.0], 'file')
+    """
+    meshes, labels, stored, info = read_3dm_blocks(path, frame_layer=frame_layer)
+    frame_from = "argument" if frame is not None else "none" if stored is None else "file"
+    info["frame_from"] = frame_from
+    return Assembly.from_meshes(meshes, frame=frame if frame is not None else stored or (), labels=labels, info=info)
 
 
 def _paths(paths):

@@ -49,18 +49,18 @@ def read_compas(path, supports=None) -> tuple[list[trimesh.Trimesh], list[int], 
     increasing node-key order), ``labels`` the node keys.
     """
     path = Path(path)
-    nodes, dtype, stored = _nodes(path)
+    nodes, dtype, stored = _nodes(path)  # stored: the info of a file of write_compas, else None
     keys = sorted(nodes, key=_node_key)
     meshes = [_block_mesh(path, key, nodes[key]) for key in keys]
     labels = [_node_key(key) for key in keys]
-    frame_keys, origin = _support_keys(path, nodes, keys, labels, supports)
+    frame_keys, origin = _support_keys(path, nodes, keys, labels, supports, ours=stored is not None)
     index_of = {label: k for k, label in enumerate(labels)}
     unknown = [key for key in frame_keys if key not in index_of]
     if unknown:
         raise AssemblyError(f"support keys {unknown} are not nodes of {path.name}; its node keys are "
                             f"{labels[0]}..{labels[-1]}")
     frame = sorted(index_of[key] for key in frame_keys)
-    info = {**stored, "source": [str(path)], "format": "compas", "dtype": dtype, "supports_from": origin}
+    info = {**(stored or {}), "source": [str(path)], "format": "compas", "dtype": dtype, "supports_from": origin}
     names = [nodes[key].get("name") for key in keys]
     if any(isinstance(name, str) for name in names):
         info["names"] = names
@@ -247,7 +247,7 @@ def _nodes(path: Path) -> tuple[dict, str, dict]:
         stored = json.loads(stored) if isinstance(stored, str) else stored
     except json.JSONDecodeError:
         stored = None
-    return nodes, dtype, dict(stored) if isinstance(stored, dict) else {}
+    return nodes, dtype, dict(stored) if isinstance(stored, dict) else None
 
 
 def _node_key(key):
@@ -258,13 +258,14 @@ def _node_key(key):
         return key
 
 
-def _support_keys(path: Path, nodes: dict, keys, labels, supports) -> tuple[list, str]:
+def _support_keys(path: Path, nodes: dict, keys, labels, supports, ours: bool = False) -> tuple[list, str]:
+    """The support node keys and where they came from; a file of :func:`write_compas` (``ours``) states its frame."""
     if supports is not None:
         if isinstance(supports, (str, bytes)) or not hasattr(supports, "__iter__"):
             raise AssemblyError(f"supports must be an iterable of node keys, got {supports!r}")
         return list(supports), "argument"
     marked = [label for key, label in zip(keys, labels) if nodes[key].get("is_support")]
-    if marked:
+    if marked or ours:
         return marked, "file"
     if path.stem in UPSTREAM_SUPPORTS:
         return list(UPSTREAM_SUPPORTS[path.stem]), "upstream examples"

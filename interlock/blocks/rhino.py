@@ -11,13 +11,12 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
-from interlock.blocks.assembly import Assembly
 from interlock.blocks.lozenge import Lozenge
 from interlock.blocks.repair import merge_vertices, split_t_junctions, triangulate_polygons, unmatched_edges
 from interlock.errors import AssemblyError
 from interlock.wallpaper.elements import GroupElement, parse_symop
 
-__all__ = ["write_3dm", "read_3dm", "RhinoError", "FRAME_LAYER", "MARKER_KEY", "INFO_KEY", "MISSING_MESSAGE",
+__all__ = ["write_3dm", "read_3dm_blocks", "RhinoError", "FRAME_LAYER", "MARKER_KEY", "INFO_KEY", "MISSING_MESSAGE",
            "RHINO_VERSION", "LAYER_COLOURS"]
 
 #: The layer whose objects are the fixed blocks (the frame), on writing and on reading (any case).
@@ -43,7 +42,7 @@ class RhinoError(AssemblyError):
     """A ``.3dm`` file that cannot be read as blocks or written, or rhino3dm missing."""
 
 
-def write_3dm(assembly: Assembly, path, *, classes=None, version: int = RHINO_VERSION) -> Path:
+def write_3dm(assembly, path, *, classes=None, version: int = RHINO_VERSION) -> Path:
     """Write an assembly to a Rhino ``.3dm`` file, one closed mesh object per block.
 
     - Objects are named ``block_0007 <label>`` (block index, then the label: a group
@@ -58,7 +57,7 @@ def write_3dm(assembly: Assembly, path, *, classes=None, version: int = RHINO_VE
     - Document user text: :data:`MARKER_KEY`, :data:`INFO_KEY` and each key of
       ``assembly.info`` (``group``, ``deformation``, ``seed``, ...) as JSON.
 
-    Vertices are double precision, so :func:`read_3dm` gives back every block's
+    Vertices are double precision, so :func:`~interlock.blocks.load_3dm` gives back every block's
     world vertices bit for bit.  The file is written next to ``path`` under a
     temporary name and then moved into place, so a reader never sees half a file.
 
@@ -87,17 +86,17 @@ def write_3dm(assembly: Assembly, path, *, classes=None, version: int = RHINO_VE
     Examples
     --------
     >>> import tempfile
-    >>> from interlock.blocks import presets
+    >>> from interlock.blocks import Assembly, presets
     >>> grid = presets.cube_grid()
     >>> with tempfile.TemporaryDirectory() as folder:
-    ...     back = read_3dm(write_3dm(grid, Path(folder) / "grid.3dm"))
+    ...     back = Assembly.load(write_3dm(grid, Path(folder) / "grid.3dm"))
     >>> len(back), back.frame == grid.frame, back.info["preset"], back.labels[:3]
     (9, True, 'cube_grid', ((0, 0), (0, 1), (0, 2)))
     """
     rhino = _rhino3dm()
     path = Path(path)
-    if not isinstance(assembly, Assembly):
-        raise RhinoError(f"write_3dm needs an Assembly, got {type(assembly).__name__}")
+    if not all(hasattr(assembly, name) for name in ("types", "transforms", "labels", "frame", "world_meshes")):
+        raise RhinoError(f"write_3dm needs an Assembly (interlock.blocks.Assembly), got {type(assembly).__name__}")
     if not len(assembly):
         raise RhinoError(f"nothing to write to {path.name}: the assembly has no blocks")
     values, kind = block_classes(assembly) if classes is None else classes
@@ -135,63 +134,12 @@ def write_3dm(assembly: Assembly, path, *, classes=None, version: int = RHINO_VE
     return path
 
 
-def read_3dm(path, frame=None, *, frame_layer: str = FRAME_LAYER) -> Assembly:
-    """An assembly from a Rhino ``.3dm`` file: every closed mesh or closed polysurface is a block.
+def read_3dm_blocks(path, *, frame_layer: str = FRAME_LAYER) -> tuple[list[trimesh.Trimesh], list, tuple | None, dict]:
+    """The blocks of a ``.3dm`` file: ``(meshes, labels, frame, info)``, read for :func:`~interlock.blocks.load_3dm`.
 
-    A file of :func:`write_3dm` comes back exactly: the blocks in their order
-    with bit-identical vertices, their labels (group elements, lozenges, ...),
-    the frame and ``info``.  A file drawn by a person gives one block per
-    object, in file order, labelled by the object's name (else its id); the
-    objects on the layer ``frame_layer`` (or a sublayer of it; any case) are
-    the frame.
-
-    Objects may be meshes (vertices welded where they coincide), or
-    polysurfaces and extrusions: those Rhino saved with render meshes are read
-    through them; others with planar faces and straight edges (boxes, prisms,
-    anything faceted) are cut into polygons here.  rhino3dm cannot mesh curved
-    surfaces outside Rhino, so a curved polysurface saved without render
-    meshes is an error saying so.
-
-    Parameters
-    ----------
-    path : str or path-like
-    frame : iterable of int, optional
-        Indices of the fixed blocks, instead of the frame layer.
-    frame_layer : str
-        The name of the layer of fixed blocks.
-
-    Returns
-    -------
-    Assembly
-        ``info`` holds the written ``info`` (for files of :func:`write_3dm`),
-        ``source``, ``format`` (``"3dm"``) and ``frame_from`` (``"argument"``,
-        ``"file"`` or ``"none"``).
-
-    Raises
-    ------
-    RhinoError
-        (one line) if rhino3dm is missing, the file is missing, empty or not a
-        ``.3dm`` file, holds no objects, or an object is not a closed solid (an
-        open mesh, a curve, a point, text, ...; the message names the object).
-
-    Examples
-    --------
-    Two boxes drawn as a person would, the lower one on the ``frame`` layer:
-
-    >>> import rhino3dm, tempfile
-    >>> model = rhino3dm.File3dm()
-    >>> def box(z, layer_name):
-    ...     layer, attributes = rhino3dm.Layer(), rhino3dm.ObjectAttributes()
-    ...     layer.Name = layer_name
-    ...     attributes.LayerIndex = model.Layers.Add(layer)
-    ...     corners = rhino3dm.BoundingBox(0, 0, z, 1, 1, z + 1)
-    ...     return model.Objects.AddBrep(rhino3dm.Brep.CreateFromBox(rhino3dm.Box(corners)), attributes)
-    >>> _, _ = box(0, "frame"), box(1, "blocks")
-    >>> with tempfile.TemporaryDirectory() as folder:
-    ...     _ = model.Write(str(Path(folder) / "stack.3dm"), 7)
-    ...     stack = read_3dm(Path(folder) / "stack.3dm")
-    >>> len(stack), stack.frame, stack.volumes.tolist(), stack.info["frame_from"]
-    (2, (0,), [1.0, 1.0], 'file')
+    See :func:`~interlock.blocks.assembly.load_3dm` for what is read;
+    ``frame`` holds the indices of the blocks on the layer ``frame_layer``
+    (None when the file has no such layer and is not an interlock file).
     """
     rhino = _rhino3dm()
     path = Path(path)
@@ -218,15 +166,13 @@ def read_3dm(path, frame=None, *, frame_layer: str = FRAME_LAYER) -> Assembly:
     if ours and expected is not None and expected != len(blocks):
         raise RhinoError(f"{path.name} announces {expected} blocks but holds {len(blocks)}; the file is cut short "
                          "or objects were deleted")
-    stored = [k for k, block in enumerate(blocks) if block[3]]
+    stored = tuple(k for k, block in enumerate(blocks) if block[3]) if (on_frame or ours) else None
     info = _info(_string(document, INFO_KEY)) if ours else {}
-    frame_from = "argument" if frame is not None else "file" if (on_frame or ours) else "none"
-    info.update({"source": [str(path)], "format": "3dm", "frame_from": frame_from})
-    return Assembly.from_meshes([b[1] for b in blocks], frame=stored if frame is None else frame,
-                                labels=[b[2] for b in blocks], info=info)
+    info.update({"source": [str(path)], "format": "3dm"})
+    return [b[1] for b in blocks], [b[2] for b in blocks], stored, info
 
 
-def block_classes(assembly: Assembly) -> tuple[np.ndarray, str]:
+def block_classes(assembly) -> tuple[np.ndarray, str]:
     """One small integer per block, and what it means (the layers of :func:`write_3dm`).
 
     The rules of ``interlock.gallery.appearance.block_classes``: lozenge
@@ -260,7 +206,7 @@ def _add_layer(rhino, document, name: str, colour) -> int:
     return document.Layers.Add(layer)
 
 
-def _block_strings(assembly: Assembly, i: int, value: int, kind: str, world: trimesh.Trimesh) -> dict[str, str]:
+def _block_strings(assembly, i: int, value: int, kind: str, world: trimesh.Trimesh) -> dict[str, str]:
     label = assembly.labels[i]
     label_type, text = _label_text(label)
     strings = {"block": str(i), "label": text, "label_type": label_type, "class": str(value), "class_kind": kind,

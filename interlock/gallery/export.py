@@ -1,4 +1,4 @@
-"""Mesh files of assemblies that keep the blocks apart: STL, OBJ, PLY, GLB, 3MF, VTU and XDMF."""
+"""Files of assemblies that keep the blocks apart: STL, OBJ, PLY, GLB, 3MF, VTU, XDMF, Rhino 3dm and COMPAS JSON."""
 
 from __future__ import annotations
 
@@ -16,6 +16,8 @@ from trimesh.visual import TextureVisuals
 from trimesh.visual.material import PBRMaterial
 
 from interlock.blocks.assembly import Assembly
+from interlock.blocks.compas import write_compas
+from interlock.blocks.rhino import write_3dm
 from interlock.blocks.meshfiles import (BLOCK_DATA, FIXED_DATA, FIXED_WORD, OBJ_SECOND_LINE, STL_FIXED_BIT,
                                        STL_MAX_FRAMED, STL_RECORD, file_header)
 from interlock.errors import GalleryError
@@ -38,6 +40,11 @@ FORMATS = {
             "type and class, class colours; 'interlock blocks=N fixed=K' in the model metadata",
     ".vtu": "VTK unstructured grid; triangles with cell data block, class, mirrored, fixed",
     ".xdmf": "XDMF with inline XML data; triangles with cell data block, class, mirrored, fixed",
+    ".3dm": "Rhino 3dm (rhino3dm, the 'rhino' extra); one mesh object per block named 'block_0007 <label>', "
+            "layers by class and a 'frame' layer, label, class and transform as user strings, info as document "
+            "user text",
+    ".json": "COMPAS assembly JSON (compas_assembly / compas_cra); one node per block with is_support from the "
+             "frame, names and labels as node attributes, info as an assembly attribute",
 }
 
 #: The most blocks an STL file can tell apart: block indices in the triangles' 2-byte attribute.  Up to
@@ -370,5 +377,13 @@ def _write_meshio(assembly: Assembly, path: Path):
             meshio.write(temporary, mesh, file_format="vtu")
 
 
+def _write_3dm(assembly: Assembly, path: Path):
+    write_3dm(assembly, path, classes=appearance.block_classes(assembly))
+
+
+def _write_compas(assembly: Assembly, path: Path):
+    write_compas(assembly, path)
+
+
 _WRITERS = {".stl": _write_stl, ".obj": _write_obj, ".ply": _write_ply, ".glb": _write_glb, ".3mf": _write_3mf,
-            ".vtu": _write_meshio, ".xdmf": _write_meshio}
+            ".vtu": _write_meshio, ".xdmf": _write_meshio, ".3dm": _write_3dm, ".json": _write_compas}

@@ -1,0 +1,51 @@
+"""``interlock convert IN OUT``: every format to every other, blocks, volumes and frame kept; one-line errors."""
+
+import numpy as np
+import pytest
+
+from interlock.blocks import Assembly, rhomblock_assembly, random_hexagon
+from interlock.cli import OUTPUT_SUFFIXES, main
+from interlock.gallery import export
+
+pytest.importorskip("rhino3dm")
+
+
+@pytest.fixture(scope="module")
+def hexagon_file(tmp_path_factory):
+    hexagon = rhomblock_assembly(random_hexagon(3, 3, 3, seed=1), frame="boundary")
+    return hexagon, export(hexagon, tmp_path_factory.mktemp("convert") / "hexagon.stl")
+
+
+@pytest.mark.parametrize("suffix", [s for s in OUTPUT_SUFFIXES if s != ".stl"])
+def test_a_conversion_there_and_back_keeps_blocks_volumes_and_frame(hexagon_file, tmp_path, suffix, capsys):
+    hexagon, source = hexagon_file
+    there, back = tmp_path / f"hexagon{suffix}", tmp_path / "back.stl"
+    assert main(["convert", str(source), str(there)]) == 0
+    assert main(["convert", str(there), str(back)]) == 0
+    assert "(from the file)" in capsys.readouterr().out
+    for path in (there, back):
+        loaded = Assembly.load(path)
+        assert len(loaded) == len(hexagon) and loaded.frame == hexagon.frame
+        assert np.allclose(np.sort(loaded.volumes), np.sort(hexagon.volumes), rtol=1e-6)
+
+
+def test_fixed_replaces_the_stored_frame(hexagon_file, tmp_path):
+    _, source = hexagon_file
+    assert main(["convert", str(source), str(tmp_path / "h.3dm"), "--fixed", "0-2"]) == 0
+    assert Assembly.load(tmp_path / "h.3dm").frame == (0, 1, 2)
+
+
+@pytest.mark.parametrize("target, message", [("h.xyz", "choose a suffix"), ("SAME", "the same file")])
+def test_bad_targets_are_one_line_errors(hexagon_file, tmp_path, capsys, target, message):
+    _, source = hexagon_file
+    target = str(source) if target == "SAME" else str(tmp_path / target)
+    assert main(["convert", str(source), target]) == 2
+    err = capsys.readouterr().err.strip()
+    assert message in err and len(err.splitlines()) == 1 and "Traceback" not in err
+
+
+def test_a_file_that_is_not_a_3dm_is_a_one_line_error(tmp_path, capsys):
+    (tmp_path / "bad.3dm").write_text("not a rhino file")
+    assert main(["convert", str(tmp_path / "bad.3dm"), str(tmp_path / "out.json")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "not a Rhino .3dm file" in err and len(err.splitlines()) == 1
