@@ -20,6 +20,7 @@ from interlock.errors import InterlockError
 from interlock.verify.admissible import (MOVING_RTOL, bent_contacts, moving_names, rigid_across_bends, unless_bent,
                                          unless_missed)
 from interlock.verify.contacts import contacts as find_contacts
+from interlock.verify.contacts import model_contacts
 from interlock.verify.margin import Margin, assess, rounding_tolerance
 from interlock.verify.matrix import InterlockingMatrix, interlocking_matrix
 from interlock.verify.validate import validate as check_overlaps
@@ -165,7 +166,10 @@ def check(assembly: Assembly, frame=None, translational: bool = False, certify: 
     rank_rtol, lp_tol : float
         Tolerances (see :data:`RANK_RTOL`, :data:`LP_TOL`); reported in the verdict.
     contacts : sequence of Contact, optional
-        Precomputed contacts (e.g. to check several frames).
+        Precomputed contacts (e.g. to check several frames).  Default: the
+        contacts the assembly carries (``info["contacts"]``, e.g.
+        :func:`~interlock.blocks.presets.block_on_pins`), else the search of
+        :func:`~interlock.verify.contacts.contacts`.
     validate : bool
         First check that no two blocks overlap (:func:`~interlock.verify.validate.validate`).
     progress : callable, optional
@@ -226,7 +230,7 @@ def check(assembly: Assembly, frame=None, translational: bool = False, certify: 
         with _stage(timings, "validate", progress):
             check_overlaps(assembly)
     with _stage(timings, "contacts", progress):
-        found = find_contacts(assembly) if contacts is None else tuple(contacts)
+        found = model_contacts(assembly, contacts)
     with _stage(timings, "matrix", progress):
         A = interlocking_matrix(assembly, frame, translational, contacts=found)
     fixed = tuple(sorted(set(range(len(assembly))) - set(A.free.tolist())))

@@ -19,6 +19,8 @@ __all__ = [
     "ContactError",
     "Facets",
     "contacts",
+    "model_contacts",
+    "GIVEN_CONTACTS",
     "facets",
     "DEFAULT_CONTACT_RTOL",
     "DEFAULT_ANGLE_TOL",
@@ -186,6 +188,32 @@ def contacts(assembly: Assembly, rtol: float = DEFAULT_CONTACT_RTOL, angle_tol: 
     return tuple(sorted(found, key=lambda c: (c.i, c.j, c.facet_i, c.facet_j)))
 
 
+#: ``Assembly.info`` key of contacts given with an assembly (point and line contacts that the face search cannot
+#: find, e.g. :func:`~interlock.blocks.presets.block_on_pins`): a tuple of :class:`Contact`.
+GIVEN_CONTACTS = "contacts"
+
+
+def model_contacts(assembly: Assembly, contacts=None) -> tuple[Contact, ...]:
+    """The contacts a verdict uses: ``contacts`` if given, else those the assembly carries, else :func:`contacts`.
+
+    An assembly carries contacts in ``assembly.info[GIVEN_CONTACTS]`` when
+    some of its contacts are not face to face (Remark 3.11), as
+    :func:`~interlock.blocks.presets.block_on_pins` does.
+
+    >>> from interlock.blocks import presets
+    >>> len(model_contacts(presets.block_on_pins())), len(model_contacts(presets.cube_grid()))
+    (7, 12)
+    """
+    if contacts is not None:
+        return tuple(contacts)
+    given = assembly.info.get(GIVEN_CONTACTS) if isinstance(assembly.info, dict) else None
+    if given is not None:
+        if not all(isinstance(c, Contact) for c in given):
+            raise ContactError(f"assembly.info[{GIVEN_CONTACTS!r}] must hold Contact objects")
+        return tuple(given)
+    return _searched(assembly)
+
+
 def _pair_contacts(assembly, pairs, scale, rtol, angle_tol, area_rtol, gap=0.0) -> tuple[Contact, ...]:
     """Contacts of the given block pairs, tolerances relative to ``scale``."""
     table = FacetTable(assembly, rtol * scale, angle_tol, needed=np.unique(pairs))
@@ -324,4 +352,9 @@ def _overlaps(table: FacetTable, gi, gj, atol, area_tol, grid, gap=0.0) -> tuple
                              int(facet_i[p]), int(facet_j[p]), parts[p], origin, basis, deviation,
                              bool(table.planar[g_i] and table.planar[g_j]), separation))
     return tuple(found)
+
+
+def _searched(assembly: Assembly) -> tuple[Contact, ...]:
+    """:func:`contacts` with its defaults (reachable where a parameter is named ``contacts``)."""
+    return contacts(assembly)
 

@@ -11,7 +11,7 @@ import scipy.spatial
 
 from interlock.blocks.assembly import Assembly
 from interlock.errors import InterlockError
-from interlock.verify.contacts import contacts as find_contacts
+from interlock.verify.contacts import model_contacts
 
 __all__ = ["InterlockingMatrix", "interlocking_matrix", "MERGE_RTOL"]
 
@@ -111,7 +111,7 @@ def interlocking_matrix(assembly: Assembly, frame=None, translational: bool = Fa
     if not isinstance(assembly, Assembly):
         raise InterlockError(f"expected an Assembly, got {type(assembly).__name__}")
     fixed = _frame(assembly, frame)
-    found = find_contacts(assembly) if contacts is None else tuple(contacts)
+    found = model_contacts(assembly, contacts)
     free = np.array([b for b in range(len(assembly)) if b not in fixed], dtype=int)
     column_of = np.full(len(assembly), -1)
     column_of[free] = np.arange(len(free))

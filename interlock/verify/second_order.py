@@ -63,7 +63,7 @@ from scipy.optimize import linprog
 from interlock.blocks.assembly import Assembly
 from interlock.errors import InterlockError
 from interlock.verify.contacts import DEFAULT_ANGLE_TOL, DEFAULT_CONTACT_RTOL
-from interlock.verify.contacts import contacts as find_contacts
+from interlock.verify.contacts import model_contacts
 
 __all__ = ["SecondOrder", "SecondOrderError", "second_order", "prestress_stability", "gap_expansion",
            "SECOND_ORDER_RTOL", "INTERIOR_RTOL", "CUTTING_PLANES", "MAX_COLUMNS"]
@@ -320,7 +320,7 @@ def second_order(assembly: Assembly, frame=None, *, contacts=None, rtol: float =
         raise SecondOrderError(f"second_order needs an Assembly, got {type(assembly).__name__}")
     fixed = set(assembly.frame if frame is None else assembly.block_indices(frame, "frame"))
     free = [b for b in range(len(assembly)) if b not in fixed]
-    found = find_contacts(assembly) if contacts is None else tuple(contacts)
+    found = model_contacts(assembly, contacts)
     points, normals, p_blocks, q_blocks, skipped = _gap_constraints(assembly, found, set(free), interior_rtol)
     result = prestress_stability(points, normals, p_blocks, q_blocks, assembly.centroids, free, assembly.scale,
                                  rtol=rtol, skipped=skipped)

@@ -136,11 +136,11 @@ def test_bad_constraints_are_refused_with_a_clear_message():
 
 @pytest.mark.parametrize("h, c", [(1, 2), (2, 0.6)])
 def test_check_order_2_proves_the_cup_interlocked_at_second_order(h, c):
-    cup, found = presets.block_on_pins(h, c)
-    first = check(cup, contacts=found)
+    cup = presets.block_on_pins(h, c)
+    first = check(cup)  # the pins' point and line contacts travel with the assembly
     assert first.interlocked is False and first.rank == 5 and first.motion_kind == "sliding"
     assert "first-order motion" in first.status and first.order == 1 and first.second_order is None
-    v = check(cup, contacts=found, order=2)
+    v = check(cup, order=2)
     assert v.interlocked is True and v.order == 2 and v.second_order.blocked is True
     assert str(v).startswith("interlocked (second order)") and "first order:" in v.status
     assert v.to_dict()["second_order"]["blocked"] is True and v.finite_motion is None

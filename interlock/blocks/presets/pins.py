@@ -15,7 +15,7 @@ from interlock.blocks.presets.common import PresetError, positive
 __all__ = ["block_on_pins"]
 
 
-def block_on_pins(h: float = 1.0, c: float = 2.0) -> tuple[Assembly, tuple[Contact, ...]]:
+def block_on_pins(h: float = 1.0, c: float = 2.0) -> Assembly:
     """A block held by fixed pins that touch it along lines and at points: interlocked only at second order.
 
     The block (0) is a prism along ``y`` (``|y| <= 1``) with a V-shaped
@@ -30,9 +30,11 @@ def block_on_pins(h: float = 1.0, c: float = 2.0) -> tuple[Assembly, tuple[Conta
     stays above the bottom face).
 
     :func:`~interlock.verify.contacts.contacts` finds face-to-face contacts
-    only, so the pins' contacts are returned beside the assembly, made by
-    :meth:`Contact.at_points <interlock.blocks.contact.Contact.at_points>`: pass them to
-    :func:`~interlock.verify.check` as ``contacts=``.
+    only, so the assembly carries the pins' contacts, made by
+    :meth:`Contact.at_points <interlock.blocks.contact.Contact.at_points>`, in
+    ``info["contacts"]``; :func:`~interlock.verify.check` and
+    :func:`~interlock.verify.second_order.second_order` use them when no
+    ``contacts=`` is given.
 
     Parameters
     ----------
@@ -43,8 +45,9 @@ def block_on_pins(h: float = 1.0, c: float = 2.0) -> tuple[Assembly, tuple[Conta
 
     Returns
     -------
-    (Assembly, tuple of Contact)
-        Block 0 free, pins 1..7 the frame; the ten point-on-face contact rows.
+    Assembly
+        Block 0 free, pins 1..7 the frame; ``info["contacts"]`` the seven
+        point and line contacts (ten rows).
 
     Raises
     ------
@@ -53,8 +56,8 @@ def block_on_pins(h: float = 1.0, c: float = 2.0) -> tuple[Assembly, tuple[Conta
 
     Examples
     --------
-    >>> cup, pins = block_on_pins(h=1.0, c=2.0)
-    >>> len(cup), cup.frame, sum(len(c.vertices) for c in pins)
+    >>> cup = block_on_pins(h=1.0, c=2.0)
+    >>> len(cup), cup.frame, sum(len(c.vertices) for c in cup.info["contacts"])
     (8, (1, 2, 3, 4, 5, 6, 7), 10)
     """
     h, c = positive(h, "h"), positive(c, "c")
@@ -83,6 +86,6 @@ def block_on_pins(h: float = 1.0, c: float = 2.0) -> tuple[Assembly, tuple[Conta
             point, out = np.array([x, y, -c / 2]), np.array([0, y, 0.0])
             pins.append(wedge(point, out, (0.1, 0, 0), axis=(0, 0, 1), half=0.05))
             found.append(Contact.at_points(0, len(pins), out, [point]))
-    assembly = Assembly.from_meshes([prism, *pins], frame=range(1, len(pins) + 1),
-                                    labels=["block"] + [f"pin {k}" for k in range(1, len(pins) + 1)])
-    return assembly, tuple(found)
+    return Assembly.from_meshes([prism, *pins], frame=range(1, len(pins) + 1),
+                                labels=["block"] + [f"pin {k}" for k in range(1, len(pins) + 1)],
+                                info={"preset": "block_on_pins", "h": h, "c": c, "contacts": tuple(found)})
