@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
+from interlock.blocks.classes import block_classes
 from interlock.blocks.lozenge import Lozenge
 from interlock.blocks.repair import merge_vertices, split_t_junctions, triangulate_polygons, unmatched_edges
 from interlock.errors import AssemblyError
@@ -35,7 +36,6 @@ MISSING_MESSAGE = 'reading and writing .3dm files needs rhino3dm: pip install "i
 LAYER_COLOURS = ((0, 114, 178, 255), (230, 159, 0, 255), (0, 158, 115, 255), (204, 121, 167, 255),
                  (86, 180, 233, 255), (213, 94, 0, 255), (240, 228, 66, 255), (120, 120, 120, 255))
 _FRAME_COLOUR = (40, 40, 40, 255)
-_IDENTITY = ((1, 0), (0, 1))
 
 
 class RhinoError(AssemblyError):
@@ -68,7 +68,7 @@ def write_3dm(assembly, path, *, classes=None, version: int = RHINO_VERSION) -> 
         The file to write (any suffix; ``.3dm`` by convention).
     classes : (array of int, str), optional
         Each block's class and what classes mean, e.g. the result of
-        ``interlock.gallery.appearance.block_classes``; by default the same rules
+        :func:`interlock.blocks.classes.block_classes`; by default the same rules
         are applied here.
     version : int
         The Rhino file version (6, 7 or 8); :data:`RHINO_VERSION` by default.
@@ -171,25 +171,6 @@ def read_3dm_blocks(path, *, frame_layer: str = FRAME_LAYER) -> tuple[list[trime
     info.update({"source": [str(path)], "format": "3dm"})
     return [b[1] for b in blocks], [b[2] for b in blocks], stored, info
 
-
-def block_classes(assembly) -> tuple[np.ndarray, str]:
-    """One small integer per block, and what it means (the layers of :func:`write_3dm`).
-
-    The rules of ``interlock.gallery.appearance.block_classes``: lozenge
-    orientation (``"orientation"``) for RhomBlocks, the coset of the translation
-    subgroup (``"coset"``, the identity's first) for Escher blocks, the cell's
-    block (by the same rules where they apply) for patches of a periodic cell,
-    else the mesh type (``"type"``).
-
-    >>> from interlock.blocks import presets
-    >>> classes, kind = block_classes(presets.cube_grid())
-    >>> kind, sorted(set(classes.tolist()))
-    ('type', [0])
-    """
-    return _classes(assembly.labels, assembly.types, assembly.info)
-
-
-# --- writing ---------------------------------------------------------------------------------------
 
 def _rhino3dm():
     try:
@@ -418,27 +399,3 @@ def _label(strings: dict[str, str]):
     except (ValueError, TypeError):
         return text
     return text
-
-
-# --- classes ---------------------------------------------------------------------------------------
-
-def _classes(labels, types, info) -> tuple[np.ndarray, str]:
-    if labels and all(isinstance(label, Lozenge) for label in labels):
-        return np.array([label.orientation for label in labels], dtype=int), "orientation"
-    if labels and all(isinstance(label, GroupElement) for label in labels):
-        linear = [label.linear for label in labels]
-        order = {part: k for k, part in enumerate(sorted(set(linear), key=lambda p: (p != _IDENTITY, p)))}
-        return np.array([order[part] for part in linear], dtype=int), "coset"
-    if labels and all(_is_cell_label(label) for label in labels):
-        within = np.array([label[2] for label in labels], dtype=int)
-        cell_labels = (info or {}).get("cell_labels")
-        if cell_labels is not None and len(cell_labels) > within.max():
-            classes, kind = _classes(tuple(cell_labels), np.zeros(len(cell_labels), dtype=int), {})
-            if kind != "type":
-                return classes[within], kind
-        return within, "cell block"
-    return np.asarray(types, dtype=int).copy(), "type"
-
-
-def _is_cell_label(label) -> bool:
-    return isinstance(label, tuple) and len(label) == 3 and all(isinstance(v, (int, np.integer)) for v in label)

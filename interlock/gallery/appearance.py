@@ -6,10 +6,9 @@ import numpy as np
 import trimesh
 
 from interlock.blocks.assembly import Assembly
+from interlock.blocks.classes import block_classes
 from interlock.blocks.escher import Block
-from interlock.blocks.lozenge import Lozenge
 from interlock.errors import GalleryError
-from interlock.wallpaper.elements import GroupElement
 
 __all__ = ["as_assembly", "block_classes", "block_colours", "exploded", "exploded_factor", "PALETTE"]
 
@@ -17,7 +16,6 @@ __all__ = ["as_assembly", "block_classes", "block_colours", "exploded", "explode
 PALETTE = np.array([[0, 114, 178, 255], [230, 159, 0, 255], [0, 158, 115, 255], [204, 121, 167, 255],
                     [86, 180, 233, 255], [213, 94, 0, 255], [240, 228, 66, 255], [120, 120, 120, 255]],
                    dtype=np.uint8)
-_IDENTITY = ((1, 0), (0, 1))
 
 
 def as_assembly(obj) -> Assembly:
@@ -34,42 +32,6 @@ def as_assembly(obj) -> Assembly:
     if isinstance(obj, trimesh.Trimesh):
         return Assembly.from_meshes([obj])
     raise GalleryError(f"expected a Block, an Assembly or a trimesh.Trimesh, got {type(obj).__name__}")
-
-
-def block_classes(assembly: Assembly) -> tuple[np.ndarray, str]:
-    """One small integer per block, and what it means.
-
-    - RhomBlocks (labels are lozenges): the lozenge's orientation 0, 1, 2 ("orientation").
-    - Escher blocks (labels are group elements ``g``): the coset ``gT`` of the
-      translation subgroup, i.e. the linear part of ``g``; the identity's is 0,
-      the others follow in sorted order ("coset").
-    - Patches of a periodic cell (labels ``(a, b, i)``, :func:`~interlock.blocks.cell_patch`): the
-      class of the cell's block ``i`` by the rules above, else ``i`` itself ("cell block").
-    - Anything else: the block's mesh type ("type").
-
-    >>> from interlock.blocks import presets
-    >>> classes, kind = block_classes(presets.cube_grid())
-    >>> kind, sorted(set(classes.tolist()))
-    ('type', [0])
-    """
-    labels = assembly.labels
-    if labels and all(isinstance(label, Lozenge) for label in labels):
-        return np.array([label.orientation for label in labels], dtype=int), "orientation"
-    if labels and all(isinstance(label, GroupElement) for label in labels):
-        linear = [label.linear for label in labels]
-        order = {part: k for k, part in enumerate(sorted(set(linear), key=lambda p: (p != _IDENTITY, p)))}
-        return np.array([order[part] for part in linear], dtype=int), "coset"
-    if labels and all(_is_cell_label(label) for label in labels):
-        within = np.array([label[2] for label in labels], dtype=int)
-        cell_labels = assembly.info.get("cell_labels")
-        if cell_labels is not None and len(cell_labels) > within.max():
-            cell = Assembly(assembly.meshes, np.zeros(len(cell_labels), dtype=int),
-                            np.tile(np.eye(4), (len(cell_labels), 1, 1)), labels=cell_labels)
-            classes, kind = block_classes(cell)
-            if kind != "type":
-                return classes[within], kind
-        return within, "cell block"
-    return np.asarray(assembly.types, dtype=int).copy(), "type"
 
 
 def block_colours(assembly: Assembly) -> np.ndarray:
@@ -117,7 +79,3 @@ def exploded_factor(value) -> float:
     if not (np.isfinite(factor) and factor >= 0):
         raise GalleryError(f"exploded must be a finite factor >= 0, got {factor}")
     return factor
-
-
-def _is_cell_label(label) -> bool:
-    return isinstance(label, tuple) and len(label) == 3 and all(isinstance(v, (int, np.integer)) for v in label)

@@ -13,7 +13,8 @@ from interlock import wallpaper
 from interlock.blocks import Assembly, cell_patch, escher_block, patch, periodic_cell, presets, random_hexagon
 from interlock.blocks import rhomblock_assembly
 from interlock.blocks.assembly import load_3dm as read_3dm
-from interlock.blocks.rhino import FRAME_LAYER, INFO_KEY, MARKER_KEY, RhinoError, block_classes, write_3dm
+from interlock.blocks.classes import block_classes
+from interlock.blocks.rhino import FRAME_LAYER, INFO_KEY, MARKER_KEY, RhinoError, write_3dm
 from interlock.errors import InterlockError
 from interlock.gallery import appearance
 
@@ -72,17 +73,18 @@ def test_objects_are_named_and_layered_by_class_with_a_frame_layer(tmp_path, ass
     assert INFO_KEY in [model.Strings[k][0] for k in range(len(model.Strings))]
 
 
-@pytest.mark.parametrize("build", [
-    lambda: presets.cube_grid(),
-    lambda: rhomblock_assembly(random_hexagon(2, 3, 2, seed=1)),
-    lambda: patch(escher_block(wallpaper.group("p3"), {0: [(0.3, 0.1)]}), 1.0),
-    lambda: cell_patch(periodic_cell(escher_block(wallpaper.group("p4"), {0: [(0.25, 0.1)]})), 1),
+@pytest.mark.parametrize("build, kind, values", [
+    (lambda: presets.cube_grid(), "type", {0}),
+    (lambda: rhomblock_assembly(random_hexagon(2, 3, 2, seed=1)), "orientation", {0, 1, 2}),
+    (lambda: patch(escher_block(wallpaper.group("p3"), {0: [(0.3, 0.1)]}), 1.0), "coset", {0, 1, 2}),
+    (lambda: cell_patch(periodic_cell(escher_block(wallpaper.group("p4"), {0: [(0.25, 0.1)]})), 1), "coset",
+     {0, 1, 2, 3}),
 ])
-def test_classes_are_the_gallerys(build):
+def test_classes_are_orientations_cosets_or_types(build, kind, values):
     assembly = build()
-    classes, kind = block_classes(assembly)
-    gallery_classes, gallery_kind = appearance.block_classes(assembly)
-    assert kind == gallery_kind and np.array_equal(classes, gallery_classes)
+    classes, found = block_classes(assembly)
+    assert appearance.block_classes is block_classes  # one set of rules for gallery colours and Rhino layers
+    assert found == kind and set(classes.tolist()) == values and len(classes) == len(assembly)
 
 
 def _box_brep(lo, hi):
