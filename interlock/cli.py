@@ -580,8 +580,15 @@ def _run_convert(args) -> int:
         raise InterlockError(f"cannot write {args.target}: choose a suffix from {', '.join(OUTPUT_SUFFIXES)}")
     if Path(args.source).resolve() == Path(args.target).resolve():
         raise InterlockError(f"IN and OUT are the same file ({args.source}); write to another name")
-    assembly = Assembly.load(args.source, frame=None if args.fixed is None else _indices(args.fixed))
-    path = export(assembly, args.target)
+    from tqdm import tqdm
+
+    with tqdm(total=2, desc=f"convert: reading {Path(args.source).name}", unit="step", disable=None,
+              leave=False) as bar:
+        assembly = Assembly.load(args.source, frame=None if args.fixed is None else _indices(args.fixed))
+        bar.set_description(f"convert: writing {len(assembly)} blocks to {Path(args.target).name}")
+        bar.update(1)
+        path = export(assembly, args.target)
+        bar.update(1)
     print(f"wrote {path}: {len(assembly)} blocks, frame {_frame_text(assembly.frame, assembly.info.get('frame_from'))}")
     return 0
 
