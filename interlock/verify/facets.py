@@ -122,10 +122,9 @@ class FacetTable:
         if needed is not None:
             wanted = np.zeros(len(types), dtype=bool)
             wanted[np.asarray(needed, dtype=int)] = True
-        per_type = {}
-        for t in np.unique(types[wanted]):
-            mesh = merged(assembly.meshes[t])
-            per_type[t] = _facets(mesh, atol, angle_tol)
+        needed_types = np.unique(types[wanted]).tolist()
+        found = _facets_of([merged(assembly.meshes[t]) for t in needed_types], atol, angle_tol) if needed_types else []
+        per_type = dict(zip(needed_types, found))
         counts = np.array([len(per_type[t]) if w else 0 for t, w in zip(types, wanted)], dtype=int)
         self.start = np.concatenate([[0], np.cumsum(counts)])
         total = self.start[-1]
@@ -171,15 +170,33 @@ def merged(mesh: trimesh.Trimesh) -> trimesh.Trimesh:
 
 
 def _facets(mesh: trimesh.Trimesh, atol: float, angle_tol: float) -> Facets:
-    tri = mesh.triangles
+    return _facets_of([mesh], atol, angle_tol)[0]
+
+
+def _facets_of(meshes, atol: float, angle_tol: float) -> list[Facets]:
+    """The facets of several meshes at once: one pass of array operations over all their triangles.
+
+    The meshes share no vertex, so no facet spans two of them; facets are
+    numbered per mesh by their lowest triangle index.
+    """
+    vertex_counts = np.array([len(m.vertices) for m in meshes])
+    face_counts = np.array([len(m.faces) for m in meshes])
+    face_start = np.r_[0, np.cumsum(face_counts)]
+    owner = np.repeat(np.arange(len(meshes)), face_counts)
+    vertices = np.vstack([m.vertices for m in meshes]).reshape(-1, 3)
+    faces = np.vstack([m.faces for m in meshes]).reshape(-1, 3) + np.repeat(np.r_[0, np.cumsum(vertex_counts)][:-1],
+                                                                            face_counts)[:, None]
+    whole = trimesh.Trimesh(vertices, faces, process=False)
+    scales = np.array([max(m.scale, TINY) for m in meshes])
+    tri = vertices[faces]
     cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
     twice_area = np.linalg.norm(cross, axis=1)
-    good = twice_area > np.finfo(float).eps * max(mesh.scale, TINY) ** 2
+    good = twice_area > np.finfo(float).eps * scales[owner] ** 2
     normal = np.zeros_like(cross)
     normal[good] = cross[good] / twice_area[good, None]
 
     # coplanar neighbours: normals agree, or the smaller face's far vertex is on the larger's plane
-    adj = mesh.face_adjacency
+    adj = whole.face_adjacency
     adj = adj[good[adj].all(axis=1)] if len(adj) else adj.reshape(0, 2)
     keep = np.zeros(len(adj), dtype=bool)
     if len(adj):
@@ -187,11 +204,11 @@ def _facets(mesh: trimesh.Trimesh, atol: float, angle_tol: float) -> Facets:
         angle = 2 * np.arcsin(np.clip(np.linalg.norm(normal[a] - normal[b], axis=1) / 2, 0, 1))
         big_first = twice_area[a] >= twice_area[b]
         big, small = np.where(big_first, a, b), np.where(big_first, b, a)
-        unshared = _unshared_vertex(mesh.faces[small], mesh.faces[big])
-        far = np.abs(np.einsum("ij,ij->i", normal[big], mesh.vertices[unshared] - tri[big, 0]))
+        unshared = _unshared_vertex(faces[small], faces[big])
+        far = np.abs(np.einsum("ij,ij->i", normal[big], vertices[unshared] - tri[big, 0]))
         same_side = np.einsum("ij,ij->i", normal[a], normal[b]) > 0
         keep = same_side & ((angle <= angle_tol) | (far <= atol))
-    n_faces = len(mesh.faces)
+    n_faces = len(faces)
     graph = coo_matrix((np.ones(keep.sum()), (adj[keep, 0], adj[keep, 1])), shape=(n_faces, n_faces))
     _, label = connected_components(graph, directed=False)
 
@@ -204,14 +221,16 @@ def _facets(mesh: trimesh.Trimesh, atol: float, angle_tol: float) -> Facets:
     split = bent[label]
     label = np.where(split, label.max() + 1 + np.arange(n_faces), label)
     label[~good] = -1
-    # number facets by their lowest triangle index
+    # number facets by their lowest triangle index (so mesh after mesh)
     used = np.flatnonzero(good)
     _, first, label_g = np.unique(label[used], return_index=True, return_inverse=True)
     order = np.argsort(np.argsort(used[first], kind="stable"), kind="stable")
     label = np.full(n_faces, -1)
     label[used] = order[label_g]
     n_facets = len(first)
-    if n_facets == 0:
+    facet_owner = owner[np.sort(used[first])]
+    per_mesh = np.bincount(facet_owner, minlength=len(meshes))
+    if np.any(per_mesh == 0):
         raise ContactError("the mesh has no triangle of positive area")
     nrm, org = _planes(label[used], cross[used], tri[used], np.ones(len(used), dtype=bool))
     bases = plane_bases(nrm)
@@ -222,19 +241,61 @@ def _facets(mesh: trimesh.Trimesh, atol: float, angle_tol: float) -> Facets:
     triangles = shapely.polygons(flat)
     members = np.argsort(lab, kind="stable")
     groups = np.split(members, np.cumsum(np.bincount(lab, minlength=n_facets))[:-1])
-    polygons = np.empty(n_facets, dtype=object)
-    for f, group in enumerate(groups):
-        polygons[f] = triangles[group[0]] if len(group) == 1 else shapely.union_all(triangles[group])
-    polygons = clean_polygons(polygons, atol)
+    polygons = clean_polygons(_unions(triangles, lab, n_facets), atol)
     # how far the grouped triangles really are from their common plane: rounding, or a bend within tolerance
     offsets = np.abs(np.einsum("fvi,fi->fv", tri[used] - org[lab][:, None], nrm[lab])).max(axis=1)
     flatness = np.zeros(n_facets)
     np.maximum.at(flatness, lab, offsets)
-    magnitude = float(np.abs(mesh.vertices).max(initial=0.0)) or 1.0
-    planar = flatness <= PLANAR_ULPS * np.finfo(float).eps * magnitude
-    for array in (nrm, org, bases, polygons, flatness, planar):
-        array.setflags(write=False)
-    return Facets(nrm, org, bases, polygons, tuple(used[g] for g in groups), flatness, planar)
+    magnitude = np.array([float(np.abs(m.vertices).max(initial=0.0)) or 1.0 for m in meshes])
+    planar = flatness <= PLANAR_ULPS * np.finfo(float).eps * magnitude[facet_owner]
+    triangles_of = [used[g] - face_start[facet_owner[f]] for f, g in enumerate(groups)]
+    out, start = [], 0
+    for k, count in enumerate(per_mesh.tolist()):
+        part = slice(start, start + count)
+        arrays = [nrm[part].copy(), org[part].copy(), bases[part].copy(), polygons[part].copy(),
+                  flatness[part].copy(), planar[part].copy()]
+        for array in arrays:
+            array.setflags(write=False)
+        n_, o_, b_, p_, f_, pl_ = arrays
+        out.append(Facets(n_, o_, b_, p_, tuple(triangles_of[part]), f_, pl_))
+        start += count
+    return out
+
+
+def _unions(pieces: np.ndarray, group: np.ndarray, count: int) -> np.ndarray:
+    """The union of the ``pieces`` of each group ``0 .. count - 1``: one vectorised call per group size class.
+
+    A facet's triangles are edge-matched and do not overlap (a coverage), so
+    GEOS' coverage union, far cheaper than the general one, is tried first.
+    Groups are padded with None to a common length (powers of two, so that
+    a few large facets do not pad all the others) and reduced along that axis.
+    """
+    order = np.argsort(group, kind="stable")
+    sizes = np.bincount(group, minlength=count)
+    starts = np.r_[0, np.cumsum(sizes)][:-1]
+    out = np.empty(count, dtype=object)
+    single = sizes == 1
+    out[single] = pieces[order[starts[single]]]
+    width = np.maximum(1, 2 ** np.ceil(np.log2(np.maximum(sizes, 1)))).astype(int)
+    for size in np.unique(width[~single]).tolist():
+        rows = np.flatnonzero((width == size) & ~single)
+        table = np.full((len(rows), size), None, dtype=object)
+        column = np.arange(size)
+        inside = column[None, :] < sizes[rows, None]
+        table[inside] = pieces[order[(starts[rows, None] + column[None, :])[inside]]]
+        try:
+            unions = shapely.coverage_union_all(table, axis=1)
+        except shapely.errors.GEOSException:  # a facet of this size class is not edge-matched (T-junctions)
+            unions = shapely.union_all(table, axis=1)
+        # a coverage union assumes edge-matched pieces that do not overlap; where the result shows otherwise
+        # (invalid, area lost to overlaps, or more than one polygon), the general union is taken instead
+        areas = np.where(inside, shapely.area(np.where(inside, table, shapely.Polygon())), 0.0).sum(axis=1)
+        suspect = (~shapely.is_valid(unions) | (shapely.get_type_id(unions) != shapely.GeometryType.POLYGON)
+                   | (np.abs(shapely.area(unions) - areas) > 1e-9 * np.maximum(areas, TINY)))
+        if suspect.any():
+            unions[suspect] = shapely.union_all(table[suspect], axis=1)
+        out[rows] = unions
+    return out
 
 
 def _unshared_vertex(faces_small, faces_big):
@@ -292,13 +353,16 @@ def clean_polygons(polygons, atol):
             break
         coords, ring_of = coords[~remove], ring_of[~remove]
     counts = np.bincount(ring_of, minlength=len(rings))
-    bounds = np.r_[0, np.cumsum(counts)]
-    first_ring = np.r_[0, np.cumsum(np.bincount(polygon_of, minlength=len(polygons)))]  # rings come per polygon
-    out = np.empty(len(polygons), dtype=object)
-    for p in range(len(polygons)):
-        members = range(first_ring[p], first_ring[p + 1])
-        valid = [coords[bounds[k]:bounds[k + 1]] for k in members if counts[k] >= 3]
-        exterior_ok = len(members) > 0 and counts[members[0]] >= 3
-        out[p] = shapely.Polygon(valid[0], valid[1:]) if exterior_ok else shapely.Polygon()
+    first_ring = np.r_[0, np.cumsum(np.bincount(polygon_of, minlength=len(polygons)))][:-1]  # rings come per polygon
+    exterior_ok = np.zeros(len(polygons), dtype=bool)
+    has_rings = first_ring < len(rings)
+    exterior_ok[has_rings] = counts[first_ring[has_rings]] >= 3
+    kept = (counts >= 3) & exterior_ok[polygon_of]  # rings of fewer than 3 vertices are dropped (holes) or void
+    out = np.array([shapely.Polygon()] * len(polygons), dtype=object)
+    if kept.any():
+        on_kept = kept[ring_of]
+        _, ring_index = np.unique(ring_of[on_kept], return_inverse=True)
+        built = shapely.linearrings(coords[on_kept], indices=ring_index)
+        shapely.polygons(built, indices=polygon_of[kept], out=out)
     return shapely.orient_polygons(shapely.normalize(out))
 

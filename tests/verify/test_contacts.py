@@ -451,3 +451,22 @@ def test_instanced_pairs_share_one_computation_per_kind(which):
         np.testing.assert_allclose(np.sort(c.vertices, axis=0), np.sort(d.vertices, axis=0), atol=1e-12)
         # rings stay counter-clockwise about the normal, also for mirror images
         assert np.dot(np.cross(c.vertices[1] - c.vertices[0], c.vertices[2] - c.vertices[1]), c.normal) > 0
+
+
+@pytest.mark.parametrize("pieces, area", [
+    # edge-matched: a square of two triangles (the coverage union's case)
+    ([[(0, 0), (2, 0), (2, 2)], [(0, 0), (2, 2), (0, 2)]], 4.0),
+    # a T-junction at (1, 1): not edge-matched, the general union is taken
+    ([[(0, 0), (2, 0), (2, 2)], [(0, 0), (1, 1), (0, 2)], [(1, 1), (2, 2), (0, 2)]], 4.0),
+    # overlapping triangles: area would be lost, the general union is taken
+    ([[(0, 0), (2, 0), (0, 2)], [(0, 0), (2, 0), (0, 2)], [(0, 0), (2, 0), (2, 2)]], 3.0),
+])
+def test_facet_outlines_are_the_union_of_their_triangles_whatever_their_meshing(pieces, area):
+    import shapely
+
+    from interlock.verify.facets import _unions
+
+    triangles = shapely.polygons(np.array(pieces, dtype=float))
+    union = _unions(triangles, np.zeros(len(pieces), dtype=int), 1)[0]
+    assert union.is_valid and union.geom_type == "Polygon" and abs(union.area - area) < 1e-12
+    assert shapely.normalize(union).equals(shapely.union_all(triangles))
