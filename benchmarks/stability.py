@@ -536,7 +536,8 @@ def _armadillo(repeats, upstream, ours_cra, quick, table, notes, scaling) -> lis
     scaling.append({"case": "armadillo (Table 5)", "blocks": len(assembly),
                     "ours_seconds": default.get("cra_seconds"),
                     "ours": {"stable": True, "unstable": False}.get(default.get("cra")),
-                    "upstream_seconds": (upstream_record["cra"].get("seconds") if upstream_record else None),
+                    "upstream_seconds": (upstream_record["cra"].get("seconds", upstream_record["cra"].get("timed_out"))
+                                         if upstream_record else None),
                     "upstream": (upstream_record["cra"].get("stable") if upstream_record else None),
                     "upstream_timed_out": bool(upstream_record and "timed_out" in upstream_record["cra"]),
                     "paper_seconds": ARMADILLO_PAPER_CRA})
@@ -796,7 +797,8 @@ def _scaling_panel(sub, scaling) -> None:
                            edgecolor="black", linewidth=0.4)
         for b, t, _, r in points:
             if key == "upstream" and r.get("upstream_timed_out"):
-                ax.annotate("stopped", (b, t), textcoords="offset points", xytext=(6, -3), fontsize=7)
+                ax.annotate(f"stopped at {t:.0f} s", (b, t), textcoords="offset points", xytext=(-8, -12),
+                            fontsize=7, ha="right")
     for r in scaling:
         if r.get("paper_seconds"):
             ax.scatter([r["blocks"]], [r["paper_seconds"]], marker="*", s=90, color="#009E73",
