@@ -1,6 +1,9 @@
 """Stability under self-weight: rigid-block equilibrium (RBE), coupled rigid-block analysis (CRA), the tilt test.
 
-The shared equilibrium problem is in :mod:`~interlock.verify.statics.equilibrium`;
+The contact model (interfaces of faces that meet approximately) is in
+:mod:`~interlock.verify.statics.interfaces` (``interfaces(assembly)``; the module keeps its name, so
+the function is not re-exported here); the shared equilibrium problem is in
+:mod:`~interlock.verify.statics.equilibrium`;
 the theory, with the CRA paper's numbering, is in ``docs/statics.md``.
 
 >>> import trimesh
@@ -13,11 +16,14 @@ True
 
 from interlock.verify.statics.cra import (DEFAULT_FORCE_BOUND, DEFAULT_MIN_SLIDE, DEFAULT_SECTORS, REFINED_SECTORS,
                                           CRAResult, cra)
-from interlock.verify.statics.equilibrium import (CONES, DEFAULT_EPS, DEFAULT_ETA, DEFAULT_SIDES, StabilityError,
-                                                  StabilityResult)
+from interlock.verify.statics.equilibrium import (CONES, DEFAULT_EPS, DEFAULT_ETA, DEFAULT_SIDES, FRICTION_RTOL,
+                                                  StabilityError, StabilityResult)
+from interlock.verify.statics.interfaces import (DEFAULT_AREA_THICKNESS, DEFAULT_GAP_THICKNESS, Interfaces,
+                                                 compas_interfaces, thickness)
 from interlock.verify.statics.rbe import rbe
 from interlock.verify.statics.tilt import DEFAULT_TILT_STEP, DEFAULT_TILT_TOL, TILT_AXES, critical_tilt, tilted_gravity
 
 __all__ = ["rbe", "StabilityResult", "StabilityError", "cra", "CRAResult", "critical_tilt", "tilted_gravity",
            "TILT_AXES", "CONES", "DEFAULT_SIDES", "DEFAULT_TILT_STEP", "DEFAULT_TILT_TOL", "DEFAULT_EPS", "DEFAULT_ETA",
-           "DEFAULT_SECTORS", "DEFAULT_FORCE_BOUND", "DEFAULT_MIN_SLIDE", "REFINED_SECTORS"]
+           "DEFAULT_SECTORS", "DEFAULT_FORCE_BOUND", "DEFAULT_MIN_SLIDE", "REFINED_SECTORS", "FRICTION_RTOL",
+           "Interfaces", "compas_interfaces", "thickness", "DEFAULT_GAP_THICKNESS", "DEFAULT_AREA_THICKNESS"]
