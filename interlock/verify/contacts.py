@@ -258,16 +258,19 @@ def _matches(table: FacetTable, pairs, atol, angle_tol, scale, tilted=False):
     offset = np.einsum("fi,fi->f", table.normals, table.origins - centre)
     points = np.hstack([table.normals / a, offset[:, None] / t])
     radius = math.sqrt(2) * (1 + 1e-9)
-    trees, gi, gj = {}, [], []
-    for i, j in pairs:
-        si, sj = slice(table.start[i], table.start[i + 1]), slice(table.start[j], table.start[j + 1])
-        if i not in trees:
-            trees[i] = cKDTree(points[si])
-        hits = trees[i].query_ball_point(-points[sj], radius)
+    # one tree per block i, queried at once with the facets of all its partners j (not pair by pair)
+    pairs = np.asarray(pairs, dtype=int).reshape(-1, 2)
+    pairs = pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
+    gi, gj = [], []
+    for i, partners in zip(*_grouped(pairs)):
+        facets_j = np.concatenate([np.arange(table.start[j], table.start[j + 1]) for j in partners])
+        if not len(facets_j) or table.start[i] == table.start[i + 1]:
+            continue
+        hits = cKDTree(points[table.start[i]:table.start[i + 1]]).query_ball_point(-points[facets_j], radius)
         sizes = np.fromiter(map(len, hits), dtype=int, count=len(hits))
         if sizes.sum():
             gi.append(table.start[i] + np.concatenate([h for h in hits if h]).astype(int))
-            gj.append(table.start[j] + np.repeat(np.arange(len(hits)), sizes))
+            gj.append(np.repeat(facets_j, sizes))
     if not gi:
         return np.zeros(0, dtype=int), np.zeros(0, dtype=int)
     gi, gj = np.concatenate(gi), np.concatenate(gj)
@@ -282,6 +285,12 @@ def _matches(table: FacetTable, pairs, atol, angle_tol, scale, tilted=False):
     ok = ((angle <= angle_tol) & (np.abs(np.einsum("ki,ki->k", ni, apart)) <= slack)
           & (np.abs(np.einsum("ki,ki->k", nj, apart)) <= slack))
     return gi[ok], gj[ok]
+
+
+def _grouped(pairs: np.ndarray):
+    """Sorted pairs ``(i, j)`` as the distinct ``i`` and, for each, the array of its ``j``."""
+    firsts, starts = np.unique(pairs[:, 0], return_index=True)
+    return firsts.tolist(), np.split(pairs[:, 1], starts[1:])
 
 
 def _overlaps(table: FacetTable, gi, gj, atol, area_tol, grid, gap=0.0) -> tuple[Contact, ...]:
@@ -303,6 +312,11 @@ def _overlaps(table: FacetTable, gi, gj, atol, area_tol, grid, gap=0.0) -> tuple
     box_i, box_j = shapely.bounds(table.polygons[gi]), shapely.bounds(moved)
     apart = np.any((box_i[:, 2:] <= box_j[:, :2] + atol) | (box_j[:, 2:] <= box_i[:, :2] + atol), axis=1)
     gi, gj, moved = gi[~apart], gj[~apart], moved[~apart]
+    # facets whose outlines do not even touch cannot overlap by more than the area tolerance; the predicate on
+    # prepared outlines is far cheaper than the snapped overlay
+    shapely.prepare(moved)
+    touching = shapely.intersects(moved, table.polygons[gi])
+    gi, gj, moved = gi[touching], gj[touching], moved[touching]
     overlap = shapely.intersection(table.polygons[gi], moved, grid_size=grid)
     parts, k = shapely.get_parts(overlap, return_index=True)
     polygonal = shapely.get_type_id(parts) == 3
