@@ -162,6 +162,12 @@ def _parser() -> argparse.ArgumentParser:
     stability.add_argument("--time-limit", type=float, default=None, metavar="SECONDS",
                            help="cra: seconds per MILP before local solvers get the last word and an undecided "
                                 "answer is 'inconclusive' (default 60)")
+    stability.add_argument("--contacts", default="interfaces", choices=("interfaces", "exact"),
+                           help="interfaces: faces that meet across small gaps and tilts, relative to each block "
+                                "pair's thickness (default); exact: faces that touch")
+    stability.add_argument("--interfaces", metavar="FILE",
+                           help="use the interfaces a COMPAS assembly JSON file stores (as compas_assembly / "
+                                "compas_cra write them) instead of finding contacts")
     stability.add_argument("--json", action="store_true", help="print JSON instead of text")
     stability.set_defaults(run=_run_stability)
 
@@ -408,10 +414,18 @@ def _run_stability(args) -> int:
     if args.time_limit is not None and args.method != "cra":
         raise InterlockError("--time-limit applies to --method cra only (rbe is one LP)")
     cra_options = {} if args.time_limit is None else {"time_limit": args.time_limit}
+    found = args.contacts
+    if args.interfaces is not None:
+        from interlock.verify.statics import compas_interfaces
+
+        found = compas_interfaces(args.interfaces, assembly)
+        if not found:
+            raise InterlockError(f"{args.interfaces} stores no interfaces; drop --interfaces to find them "
+                                 "(--contacts interfaces or exact)")
     if args.method == "cra":
-        result = cra(assembly, args.mu, density=args.density, cone=args.cone, **cra_options)
+        result = cra(assembly, args.mu, density=args.density, cone=args.cone, contacts=found, **cra_options)
     else:
-        result = rbe(assembly, args.mu, density=args.density, cone=args.cone)
+        result = rbe(assembly, args.mu, density=args.density, cone=args.cone, contacts=found)
     tilt = None
     if args.tilt_axis is not None:
         axis = (args.tilt_axis if args.tilt_axis in ("x", "y", "xy30")
@@ -422,7 +436,7 @@ def _run_stability(args) -> int:
                 bar.update(1)
 
             tilt = critical_tilt(assembly, axis, args.mu, method=args.method, density=args.density, cone=args.cone,
-                                 cra_options=cra_options or None, progress=advance)
+                                 cra_options=cra_options or None, progress=advance, contacts=found)
     if args.json:
         print(json.dumps({**result.to_dict(), "critical_tilt_degrees": tilt}, indent=2))
         return 0

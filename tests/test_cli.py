@@ -246,3 +246,16 @@ def test_stability_bad_input_is_one_line(reference_data, argv, message):
     assert run.returncode == 2 and "Traceback" not in run.stderr
     lines = run.stderr.strip().splitlines()
     assert len(lines) == 1 and message in lines[0], lines
+
+
+def test_stability_uses_the_interfaces_a_compas_file_stores(reference_data, capsys):
+    path = str(reference_data / "compas_cra" / "curve-3-blocks.json")
+    assert main(["stability", path, "--mu", "0.84", "--interfaces", path, "--json"]) == 0
+    given = json.loads(capsys.readouterr().out)
+    assert main(["stability", path, "--mu", "0.84", "--contacts", "exact", "--json"]) == 0
+    exact = json.loads(capsys.readouterr().out)
+    assert given["stable"] is True and len(given["contacts"]) == 40 and len(exact["contacts"]) != 40
+    assert given["parameters"]["contacts"] != exact["parameters"]["contacts"]
+    plain = str(reference_data / "compas_cra" / "type-a.json")
+    assert main(["stability", plain, "--mu", "0.84", "--interfaces", plain]) == 2
+    assert "stores no interfaces" in capsys.readouterr().err
