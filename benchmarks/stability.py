@@ -34,6 +34,10 @@ with exact contacts and with upstream's ``tmax``; upstream's ``cra_solve`` is
 stopped after :data:`ARMADILLO_CRA_LIMIT` seconds.  ``cra_scaling`` records CRA's
 time per upright solve against the block count (wedges, H, A, shelves, cubes,
 bridge, arch, armadillo), ours and upstream, for the chart's second panel.
+
+``exported``: our arch and a re-exported sample written by ``export(...,
+"x.json")`` (COMPAS assembly JSON), solved by compas_cra from that file alone
+and by us from the same file read back (issue 23).
 """
 
 from __future__ import annotations
@@ -192,6 +196,7 @@ def run(quick: bool = False) -> dict:
         "targets": targets,
         "cra_scaling": scaling,
         "armadillo": dict(_ARMADILLO),
+        "exported": exported_side_by_side(upstream, quick),
         "notes": notes,
     }
     _print_summary(payload)
@@ -671,6 +676,54 @@ def _upstream_solve(upstream, method, assembly, case, mu=None):
     return bool(tension <= TENSION_RTOL * weight), f"solved, tension {tension / weight:.2g} of the weight"
 
 
+def exported_side_by_side(upstream, quick: bool) -> list[dict]:
+    """Our assemblies written as COMPAS JSON by ``export(..., "x.json")``, solved by compas_cra and by us.
+
+    The file is what a compas_cra user receives: upstream reads it with
+    ``compas.json_load`` (no other preparation than its own interface search,
+    :data:`EXPORTED_INTERFACES`), takes the frame from ``is_support``, and runs
+    ``rbe_solve`` and ``cra_solve``; ours runs ``rbe`` and ``cra`` on the same
+    file read back by ``Assembly.load``.
+    """
+    import tempfile
+    from pathlib import Path
+
+    from interlock.blocks import Assembly, semicircular_arch
+    from interlock.gallery import export
+
+    mu = math.tan(math.radians(43.0))
+    subjects = [("36-voussoir arch (2 supports)", semicircular_arch())]
+    if not quick:
+        subjects.append(("compas_cra shelf-stable, re-exported", load_compas(DATA / "shelf-stable.json")))
+    out = []
+    with tempfile.TemporaryDirectory() as folder:
+        for name, assembly in subjects:
+            path = export(assembly, Path(folder) / "exported.json")
+            back = Assembly.load(path)
+            row = {"case": name, "blocks": len(back), "frame": list(back.frame), "mu": mu,
+                   "ours_rbe": bool(rbe(back, mu).stable)}
+            ours_cra, _ = _ours_cra()
+            if ours_cra is not None:
+                row["ours_cra"] = ours_cra(back, mu).stable
+            if upstream is not None:
+                up = upstream["compas"].json_load(str(path)).copy(cls=upstream["CRA_Assembly"])
+                with contextlib.redirect_stdout(io.StringIO()):
+                    upstream["interfaces"](up, **{k: v * (back.scale ** (2 if k == "amin" else 1))
+                                                  for k, v in EXPORTED_INTERFACES.items()})
+                row["upstream_supports"] = sorted(n for n in up.graph.nodes()
+                                                  if up.graph.node_attribute(n, "is_support"))
+                row["upstream_rbe"], row["upstream_rbe_message"] = _upstream_solve(upstream, "rbe", up, None, mu=mu)
+                row["upstream_cra"], row["upstream_cra_message"] = _upstream_solve(upstream, "cra", up, None, mu=mu)
+            print(f"exported {name}: {row}")
+            out.append(row)
+    return out
+
+
+#: compas_cra's interface search on exported files: ``amin`` relative to the model size squared, ``tmax``
+#: to the model size (as for the arch above).
+EXPORTED_INTERFACES = {"amin": 1e-4, "tmax": 1e-4}
+
+
 def _ours_cra():
     try:
         from interlock.verify.statics import cra
@@ -864,11 +917,33 @@ def run_armadillo() -> dict:
     return payload
 
 
+def run_exported() -> dict:
+    """Only :func:`exported_side_by_side`, into the recorded ``stability.json`` (``python -m benchmarks.stability
+    --exported``, in the environment with compas_cra)."""
+    import json
+
+    path = results_folder() / "stability.json"
+    payload = json.loads(path.read_text())
+    payload.pop("machine", None)
+    upstream, reason = _upstream()
+    with limited_blas():
+        payload["exported"] = exported_side_by_side(upstream, quick=False)
+    payload["notes"] = [n for n in payload["notes"] if not n.startswith("exported")] + [
+        f"exported rows re-run alone (run_exported) at {time.strftime('%Y-%m-%d %H:%M')}"
+        + ("" if upstream is not None else f"; {reason}")]
+    write_json("stability", payload)
+    _chart(payload)
+    return payload
+
+
 if __name__ == "__main__":
     import sys
 
     if "--armadillo" in sys.argv:
         sys.argv.remove("--armadillo")
         main(lambda quick: run_armadillo(), __doc__)
+    elif "--exported" in sys.argv:
+        sys.argv.remove("--exported")
+        main(lambda quick: run_exported(), __doc__)
     else:
         main(run, __doc__)
