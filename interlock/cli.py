@@ -596,15 +596,22 @@ def _run_convert(args) -> int:
         raise InterlockError(f"IN and OUT are the same file ({args.source}); write to another name")
     from tqdm import tqdm
 
-    with tqdm(total=2, desc=f"convert: reading {Path(args.source).name}", unit="step", disable=None,
-              leave=False) as bar:
-        assembly = Assembly.load(args.source, frame=None if args.fixed is None else _indices(args.fixed))
-        bar.set_description(f"convert: writing {len(assembly)} blocks to {Path(args.target).name}")
-        bar.update(1)
-        path = export(assembly, args.target)
-        bar.update(1)
+    with tqdm(desc=f"convert: reading {Path(args.source).name}", unit="block", disable=None, leave=False) as bar:
+        assembly = Assembly.load(args.source, frame=None if args.fixed is None else _indices(args.fixed),
+                                 progress=_bar_progress(bar))
+    with tqdm(desc=f"convert: writing {Path(args.target).name}", unit="block", disable=None, leave=False) as bar:
+        path = export(assembly, args.target, progress=_bar_progress(bar))
     print(f"wrote {path}: {len(assembly)} blocks, frame {_frame_text(assembly.frame, assembly.info.get('frame_from'))}")
     return 0
+
+
+def _bar_progress(bar):
+    """A ``progress(done, total)`` callback that moves a tqdm bar."""
+    def advance(done, total):
+        bar.total = total
+        bar.n = done + 1
+        bar.refresh()
+    return advance
 
 
 def _write(assembly, args) -> int:
@@ -612,10 +619,13 @@ def _write(assembly, args) -> int:
 
     from interlock.gallery import export, render
 
+    from tqdm import tqdm
+
     if Path(args.output).suffix.lower() == ".png":
         path = render(assembly, args.output, exploded=args.exploded)
     else:
-        path = export(assembly, args.output, exploded=args.exploded)
+        with tqdm(desc=f"writing {Path(args.output).name}", unit="block", disable=None, leave=False) as bar:
+            path = export(assembly, args.output, exploded=args.exploded, progress=_bar_progress(bar))
     print(f"wrote {path}: {len(assembly)} blocks, {len(assembly.frame)} in the frame")
     return 0
 

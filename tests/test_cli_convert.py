@@ -49,3 +49,13 @@ def test_a_file_that_is_not_a_3dm_is_a_one_line_error(tmp_path, capsys):
     assert main(["convert", str(tmp_path / "bad.3dm"), str(tmp_path / "out.json")]) == 2
     err = capsys.readouterr().err.strip()
     assert "not a Rhino .3dm file" in err and len(err.splitlines()) == 1
+
+
+@pytest.mark.parametrize("suffix", [".3dm", ".json"])
+def test_slow_formats_report_progress_per_block(hexagon_file, tmp_path, suffix):
+    hexagon, _ = hexagon_file
+    written, read = [], []
+    path = export(hexagon, tmp_path / f"h{suffix}", progress=lambda done, total: written.append((done, total)))
+    Assembly.load(path, progress=lambda done, total: read.append((done, total)))
+    assert written == [(k, len(hexagon)) for k in range(len(hexagon))]
+    assert read == [(k, len(hexagon)) for k in range(len(hexagon))]

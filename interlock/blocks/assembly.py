@@ -100,7 +100,7 @@ class Assembly:
         return cls(meshes, range(len(meshes)), np.tile(np.eye(4), (len(meshes), 1, 1)), labels, frame, info=info)
 
     @classmethod
-    def load(cls, paths, frame=None) -> Assembly:
+    def load(cls, paths, frame=None, progress=None) -> Assembly:
         """Blocks from mesh files (OBJ, STL, PLY, GLB, 3MF, ... through trimesh; VTU, XDMF through meshio;
         Rhino ``.3dm``, :func:`load_3dm`; COMPAS assembly ``.json``, :func:`load_compas`).
 
@@ -134,6 +134,9 @@ class Assembly:
             (:mod:`interlock.blocks.meshfiles`: STL attribute bits, PLY/VTU/XDMF
             ``fixed`` data, OBJ/GLB/3MF names ending in ``fixed``); for a list
             of files, the blocks whose file marks them fixed; else none.
+        progress : callable, optional
+            Called as ``progress(done, total)`` per block while a Rhino ``.3dm`` or
+            COMPAS ``.json`` file is read (the slow formats; a progress bar).
 
         Returns
         -------
@@ -162,9 +165,9 @@ class Assembly:
         """
         paths = _paths(paths)
         if isinstance(paths, (str, Path)) and Path(paths).suffix.lower() == ".3dm":
-            return load_3dm(paths, frame)
+            return load_3dm(paths, frame, progress=progress)
         if isinstance(paths, (str, Path)) and Path(paths).suffix.lower() == ".json":  # COMPAS; frame: node keys
-            assembly = load_compas(paths, supports=None if frame is None else list(frame))
+            assembly = load_compas(paths, supports=None if frame is None else list(frame), progress=progress)
             assembly.info["frame_from"] = assembly.info["supports_from"]
             return assembly
         if isinstance(paths, (str, Path)):
@@ -343,7 +346,7 @@ class Assembly:
         return tuple(sorted(set(out)))
 
 
-def load_compas(path, supports=None) -> Assembly:
+def load_compas(path, supports=None, progress=None) -> Assembly:
     """An assembly from a COMPAS assembly JSON file, without COMPAS.
 
     The file is ``{"dtype": "compas_assembly.datastructures/Assembly" (or
@@ -391,11 +394,11 @@ def load_compas(path, supports=None) -> Assembly:
     >>> len(a), a.labels, a.frame, round(float(a.volumes.sum()), 9)
     (2, (0, 1), (0,), 2.0)
     """
-    meshes, labels, frame, info = read_compas(path, supports)
+    meshes, labels, frame, info = read_compas(path, supports, progress=progress)
     return Assembly.from_meshes(meshes, frame=frame, labels=labels, info=info)
 
 
-def load_3dm(path, frame=None, *, frame_layer: str = FRAME_LAYER) -> Assembly:
+def load_3dm(path, frame=None, *, frame_layer: str = FRAME_LAYER, progress=None) -> Assembly:
     """An assembly from a Rhino ``.3dm`` file: every closed mesh or closed polysurface is a block.
 
     A file of :func:`~interlock.blocks.rhino.write_3dm` (or of ``export(..., "x.3dm")``)
@@ -453,7 +456,7 @@ def load_3dm(path, frame=None, *, frame_layer: str = FRAME_LAYER) -> Assembly:
     >>> len(stack), stack.frame, stack.volumes.tolist(), stack.info["frame_from"]
     (2, (0,), [1.0, 1.0], 'file')
     """
-    meshes, labels, stored, info = read_3dm_blocks(path, frame_layer=frame_layer)
+    meshes, labels, stored, info = read_3dm_blocks(path, frame_layer=frame_layer, progress=progress)
     frame_from = "argument" if frame is not None else "none" if stored is None else "file"
     info["frame_from"] = frame_from
     return Assembly.from_meshes(meshes, frame=frame if frame is not None else stored or (), labels=labels, info=info)

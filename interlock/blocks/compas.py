@@ -41,7 +41,7 @@ _NODE_DEFAULTS = {"x": 0.0, "y": 0.0, "z": 0.0, "block": None, "is_support": Fal
                   "mesh_size": None, "displacement": [0, 0, 0, 0, 0, 0], "name": None, "label": None}
 
 
-def read_compas(path, supports=None) -> tuple[list[trimesh.Trimesh], list[int], list[int], dict]:
+def read_compas(path, supports=None, progress=None) -> tuple[list[trimesh.Trimesh], list[int], list[int], dict]:
     """The blocks of a COMPAS assembly JSON file: ``(meshes, labels, frame, info)``, as :func:`load_compas` uses them.
 
     See :func:`~interlock.blocks.assembly.load_compas` for the format and the
@@ -51,7 +51,11 @@ def read_compas(path, supports=None) -> tuple[list[trimesh.Trimesh], list[int], 
     path = Path(path)
     nodes, dtype, stored = _nodes(path)  # stored: the info of a file of write_compas, else None
     keys = sorted(nodes, key=_node_key)
-    meshes = [_block_mesh(path, key, nodes[key]) for key in keys]
+    meshes = []
+    for k, key in enumerate(keys):
+        if progress is not None:
+            progress(k, len(keys))
+        meshes.append(_block_mesh(path, key, nodes[key]))
     labels = [_node_key(key) for key in keys]
     frame_keys, origin = _support_keys(path, nodes, keys, labels, supports, ours=stored is not None)
     index_of = {label: k for k, label in enumerate(labels)}
@@ -67,7 +71,7 @@ def read_compas(path, supports=None) -> tuple[list[trimesh.Trimesh], list[int], 
     return meshes, labels, frame, info
 
 
-def write_compas(assembly, path) -> Path:
+def write_compas(assembly, path, progress=None) -> Path:
     """Write an assembly as COMPAS assembly JSON, the schema :func:`read_compas` reads.
 
     The file is what ``compas.json_dump`` writes for a
@@ -118,6 +122,8 @@ def write_compas(assembly, path) -> Path:
     fixed = set(assembly.frame)
     nodes = {}
     for i in range(len(assembly)):
+        if progress is not None:
+            progress(i, len(assembly))
         mesh = assembly.mesh(i)
         x, y, z = (float(c) for c in assembly.centroids[i])
         nodes[str(i)] = {"block": {"dtype": BLOCK_DTYPE, "data": _mesh_data(mesh, i),

@@ -42,7 +42,7 @@ class RhinoError(AssemblyError):
     """A ``.3dm`` file that cannot be read as blocks or written, or rhino3dm missing."""
 
 
-def write_3dm(assembly, path, *, classes=None, version: int = RHINO_VERSION) -> Path:
+def write_3dm(assembly, path, *, classes=None, version: int = RHINO_VERSION, progress=None) -> Path:
     """Write an assembly to a Rhino ``.3dm`` file, one closed mesh object per block.
 
     - Objects are named ``block_0007 <label>`` (block index, then the label: a group
@@ -72,6 +72,8 @@ def write_3dm(assembly, path, *, classes=None, version: int = RHINO_VERSION) -> 
         are applied here.
     version : int
         The Rhino file version (6, 7 or 8); :data:`RHINO_VERSION` by default.
+    progress : callable, optional
+        Called as ``progress(done, total)`` after each block (a progress bar).
 
     Returns
     -------
@@ -111,6 +113,8 @@ def write_3dm(assembly, path, *, classes=None, version: int = RHINO_VERSION) -> 
     if fixed:
         layers["frame"] = _add_layer(rhino, document, FRAME_LAYER, _FRAME_COLOUR)
     for i in range(len(assembly)):
+        if progress is not None:
+            progress(i, len(assembly))
         world = assembly.mesh(i)
         mesh = rhino.Mesh()
         for x, y, z in world.vertices.tolist():
@@ -134,7 +138,8 @@ def write_3dm(assembly, path, *, classes=None, version: int = RHINO_VERSION) -> 
     return path
 
 
-def read_3dm_blocks(path, *, frame_layer: str = FRAME_LAYER) -> tuple[list[trimesh.Trimesh], list, tuple | None, dict]:
+def read_3dm_blocks(path, *, frame_layer: str = FRAME_LAYER,
+                    progress=None) -> tuple[list[trimesh.Trimesh], list, tuple | None, dict]:
     """The blocks of a ``.3dm`` file: ``(meshes, labels, frame, info)``, read for :func:`~interlock.blocks.load_3dm`.
 
     See :func:`~interlock.blocks.assembly.load_3dm` for what is read;
@@ -152,6 +157,8 @@ def read_3dm_blocks(path, *, frame_layer: str = FRAME_LAYER) -> tuple[list[trime
     on_frame = _frame_layers(document, frame_layer)
     blocks = []  # (order key, mesh, label, fixed)
     for k, item in enumerate(objects):
+        if progress is not None:
+            progress(k, len(objects))
         name = _object_name(document, item, k)
         mesh = _object_mesh(rhino, item.Geometry, name, path)
         strings = dict(item.Attributes.GetUserStrings())

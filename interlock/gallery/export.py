@@ -55,7 +55,7 @@ STL_MAX_BLOCKS = np.iinfo(np.uint16).max
 _MIRROR = np.diag([-1.0, 1.0, 1.0, 1.0])
 
 
-def export(obj, path, exploded=0.0) -> Path:
+def export(obj, path, exploded=0.0, progress=None) -> Path:
     """Write a block, a mesh or an assembly to a mesh file whose blocks load back apart.
 
     Every format carries the blocks in world coordinates, each outward-oriented
@@ -74,6 +74,9 @@ def export(obj, path, exploded=0.0) -> Path:
     exploded : float
         Move the blocks apart by this factor first
         (:func:`~interlock.gallery.appearance.exploded`); 0 keeps them in place.
+    progress : callable, optional
+        Called as ``progress(done, total)`` per block while a ``.3dm`` or ``.json``
+        file is written (the slow formats; a progress bar).
 
     Returns
     -------
@@ -120,7 +123,10 @@ def export(obj, path, exploded=0.0) -> Path:
     if not len(assembly):
         raise GalleryError(f"nothing to write to {path.name}: the assembly has no blocks")
     try:
-        _WRITERS[path.suffix.lower()](assembly, path)
+        if path.suffix.lower() in _WITH_PROGRESS:
+            _WRITERS[path.suffix.lower()](assembly, path, progress=progress)
+        else:
+            _WRITERS[path.suffix.lower()](assembly, path)
     except OSError as error:
         raise GalleryError(f"cannot write {path}: {error.strerror or error}") from None
     except ImportError as error:  # meshio writes XDMF only with h5py installed
@@ -377,13 +383,15 @@ def _write_meshio(assembly: Assembly, path: Path):
             meshio.write(temporary, mesh, file_format="vtu")
 
 
-def _write_3dm(assembly: Assembly, path: Path):
-    write_3dm(assembly, path, classes=appearance.block_classes(assembly))
+def _write_3dm(assembly: Assembly, path: Path, progress=None):
+    write_3dm(assembly, path, classes=appearance.block_classes(assembly), progress=progress)
 
 
-def _write_compas(assembly: Assembly, path: Path):
-    write_compas(assembly, path)
+def _write_compas(assembly: Assembly, path: Path, progress=None):
+    write_compas(assembly, path, progress=progress)
 
 
+#: Formats slow enough to report progress per block.
+_WITH_PROGRESS = (".3dm", ".json")
 _WRITERS = {".stl": _write_stl, ".obj": _write_obj, ".ply": _write_ply, ".glb": _write_glb, ".3mf": _write_3mf,
             ".vtu": _write_meshio, ".xdmf": _write_meshio, ".3dm": _write_3dm, ".json": _write_compas}
