@@ -5,7 +5,7 @@ An "interlocked" verdict rests on two facts about the exact matrix ``A``
 and a positive self-stress ``A^T w = 0, w > 0`` (Stiemke).  Both follow
 from a floating stress ``w~ > 0`` with a small residual and a proved lower
 bound ``sigma`` on the smallest singular value of ``A``
-(docs/certificates.md, "At scale"):
+(docs/certificates.md, section '"interlocked" at scale'):
 
 - ``sigma > 0`` is full column rank;
 - the exact correction ``delta = -A (A^T A)^{-1} r`` of the exact residual
