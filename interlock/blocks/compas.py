@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import json
-import os
-import tempfile
 import uuid
 from pathlib import Path
 
@@ -13,6 +11,7 @@ import trimesh
 
 from interlock import deprecation
 from interlock.errors import AssemblyError
+from interlock.files import write_atomically
 
 __all__ = ["read_compas", "write_compas", "UPSTREAM_SUPPORTS", "COMPAS_DTYPES", "BLOCK_DTYPE", "GRAPH_DTYPE",
            "INFO_ATTRIBUTE"]
@@ -211,22 +210,12 @@ def _json_safe(value):
 
 
 def _write_atomically(text: str, path: Path):
-    folder = path.parent
+    if not path.parent.is_dir():
+        raise AssemblyError(f"cannot write {path}: the folder {path.parent} does not exist")
     try:
-        if not folder.is_dir():
-            raise AssemblyError(f"cannot write {path}: the folder {folder} does not exist")
-        handle, temporary = tempfile.mkstemp(dir=folder, prefix=f".{path.stem}-", suffix=".json")
+        write_atomically(path, text)
     except OSError as error:
         raise AssemblyError(f"cannot write {path}: {error.strerror or error}") from None
-    try:
-        with os.fdopen(handle, "w", encoding="utf-8") as stream:
-            stream.write(text)
-        os.replace(temporary, path)
-    except OSError as error:
-        raise AssemblyError(f"cannot write {path}: {error.strerror or error}") from None
-    finally:
-        if os.path.exists(temporary):
-            os.unlink(temporary)
 
 
 def _nodes(path: Path) -> tuple[dict, str, dict]:

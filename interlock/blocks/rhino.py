@@ -4,8 +4,6 @@ from __future__ import annotations
 
 import ast
 import json
-import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -15,6 +13,7 @@ from interlock.blocks.classes import block_classes
 from interlock.blocks.lozenge import Lozenge
 from interlock.blocks.repair import merge_vertices, split_t_junctions, triangulate_polygons, unmatched_edges
 from interlock.errors import AssemblyError
+from interlock.files import atomic_write
 from interlock.wallpaper.elements import GroupElement, parse_symop
 
 __all__ = ["write_3dm", "read_3dm_blocks", "RhinoError", "FRAME_LAYER", "MARKER_KEY", "INFO_KEY", "MISSING_MESSAGE",
@@ -245,20 +244,12 @@ def _write_atomically(document, path: Path, version: int):
     if not folder.is_dir():
         raise RhinoError(f"cannot write {path}: the folder {folder} does not exist")
     try:
-        handle, temporary = tempfile.mkstemp(dir=folder, prefix=f".{path.stem}-", suffix=".3dm")
+        with atomic_write(path) as temporary:
+            if not document.Write(str(temporary), int(version)):
+                raise RhinoError(f"cannot write {path}: rhino3dm failed to write a version {version} file "
+                                 "(versions 6, 7 and 8 are supported)")
     except OSError as error:
         raise RhinoError(f"cannot write {path}: {error.strerror or error}") from None
-    os.close(handle)
-    try:
-        if not document.Write(temporary, int(version)):
-            raise RhinoError(f"cannot write {path}: rhino3dm failed to write a version {version} file "
-                             "(versions 6, 7 and 8 are supported)")
-        os.replace(temporary, path)
-    except OSError as error:
-        raise RhinoError(f"cannot write {path}: {error.strerror or error}") from None
-    finally:
-        if os.path.exists(temporary):
-            os.unlink(temporary)
 
 
 # --- reading ---------------------------------------------------------------------------------------
