@@ -19,8 +19,7 @@ from interlock.blocks.assembly import Assembly
 from interlock.errors import InterlockError
 from interlock.verify.admissible import (MOVING_RTOL, bent_contacts, moving_names, rigid_across_bends, unless_bent,
                                          unless_missed)
-from interlock.verify.contacts import contacts as find_contacts
-from interlock.verify.contacts import model_contacts
+from interlock.verify.contacts import contacts as find_contacts, model_contacts
 from interlock.verify.margin import Margin, assess, rounding_tolerance
 from interlock.verify.matrix import InterlockingMatrix, interlocking_matrix
 from interlock.verify.validate import validate as check_overlaps

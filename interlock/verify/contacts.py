@@ -193,8 +193,8 @@ def contacts(assembly: Assembly, rtol: float = DEFAULT_CONTACT_RTOL, angle_tol: 
 GIVEN_CONTACTS = "contacts"
 
 
-def model_contacts(assembly: Assembly, contacts=None) -> tuple[Contact, ...]:
-    """The contacts a verdict uses: ``contacts`` if given, else those the assembly carries, else :func:`contacts`.
+def model_contacts(assembly: Assembly, given=None) -> tuple[Contact, ...]:
+    """The contacts a verdict uses: ``given`` if not None, else those the assembly carries, else :func:`contacts`.
 
     An assembly carries contacts in ``assembly.info[GIVEN_CONTACTS]`` when
     some of its contacts are not face to face (Remark 3.11), as
@@ -204,14 +204,14 @@ def model_contacts(assembly: Assembly, contacts=None) -> tuple[Contact, ...]:
     >>> len(model_contacts(presets.block_on_pins())), len(model_contacts(presets.cube_grid()))
     (7, 12)
     """
-    if contacts is not None:
-        return tuple(contacts)
-    given = assembly.info.get(GIVEN_CONTACTS) if isinstance(assembly.info, dict) else None
     if given is not None:
-        if not all(isinstance(c, Contact) for c in given):
-            raise ContactError(f"assembly.info[{GIVEN_CONTACTS!r}] must hold Contact objects")
         return tuple(given)
-    return _searched(assembly)
+    carried = assembly.info.get(GIVEN_CONTACTS) if isinstance(assembly.info, dict) else None
+    if carried is not None:
+        if not all(isinstance(c, Contact) for c in carried):
+            raise ContactError(f"assembly.info[{GIVEN_CONTACTS!r}] must hold Contact objects")
+        return tuple(carried)
+    return contacts(assembly)
 
 
 def _pair_contacts(assembly, pairs, scale, rtol, angle_tol, area_rtol, gap=0.0) -> tuple[Contact, ...]:
@@ -366,9 +366,3 @@ def _overlaps(table: FacetTable, gi, gj, atol, area_tol, grid, gap=0.0) -> tuple
                              int(facet_i[p]), int(facet_j[p]), parts[p], origin, basis, deviation,
                              bool(table.planar[g_i] and table.planar[g_j]), separation))
     return tuple(found)
-
-
-def _searched(assembly: Assembly) -> tuple[Contact, ...]:
-    """:func:`contacts` with its defaults (reachable where a parameter is named ``contacts``)."""
-    return contacts(assembly)
-
