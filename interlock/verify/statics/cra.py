@@ -73,7 +73,7 @@ from interlock.verify.statics.cra_local import ACTIVE_TOL, SLIDE_TOL
 from interlock.verify.statics.equilibrium import (DEFAULT_EPS, DEFAULT_ETA, DEFAULT_SIDES, EquilibriumSystem,
                                                   StabilityError, contact_words, gravity_vector, json_float, positive)
 
-__all__ = ["CRAResult", "CRAProblem", "cra", "decider", "DEFAULT_EPS", "DEFAULT_ETA", "DEFAULT_SECTORS",
+__all__ = ["CRAResult", "CRAProblem", "MotionLP", "cra", "decider", "DEFAULT_EPS", "DEFAULT_ETA", "DEFAULT_SECTORS",
            "DEFAULT_FORCE_BOUND", "DEFAULT_MIN_SLIDE", "REFINED_SECTORS", "SLIDE_TOL"]
 
 #: Angular sectors of the contact plane in the first MILP, and the refinements tried when its motion
@@ -100,6 +100,29 @@ LOCAL_FIRST_BINARIES = 200
 WARM_STARTS = 3
 
 STATUSES = ("stable", "unstable", "inconclusive")
+
+
+@dataclass(frozen=True, eq=False)
+class MotionLP:
+    """Problem (11) at a fixed motion: ``min cost . x``, ``a_eq x = b_eq``, ``a_ub x <= 0``, ``x >= 0``, with
+    ``x = (f_n at the closed vertices, alpha at the sliding ones)``; the friction of a sliding vertex is
+    ``-alpha`` times its slide."""
+
+    a_eq: sp.csr_matrix
+    a_ub: sp.csr_matrix
+    cost: np.ndarray
+    closed: np.ndarray
+    sliding: np.ndarray
+    slide: np.ndarray
+
+    def forces(self, x) -> np.ndarray:
+        """Per-vertex forces ``(f_n, f_u, f_v)`` from a solution ``x`` (clipped at 0: solvers return -1e-11)."""
+        x = np.maximum(np.asarray(x, dtype=float), 0.0)
+        n_closed = int(self.closed.sum())
+        forces = np.zeros((len(self.closed), 3))
+        forces[self.closed, 0] = x[:n_closed]
+        forces[self.sliding, 1:] = -x[n_closed:, None] * self.slide[self.sliding]
+        return forces
 
 
 @dataclass(frozen=True, eq=False)
@@ -636,8 +659,9 @@ class CRAProblem:
 
     # --- exact checks -----------------------------------------------------------------------------------------
 
-    def exact(self, b_eq, motion):
-        """Forces solving (11) for this motion (least ``sum f_n``), or ``None``: an LP in ``(f_n, alpha)``."""
+    def motion_lp(self, motion) -> MotionLP | None:
+        """The LP of (11) at a fixed motion, in ``(f_n, alpha)``; ``None`` if the motion leaves the bounds
+        ``dd_n >= -1``, ``|dd| <= ratio`` or closes no vertex."""
         system = self.system
         dd = (self.kinematic @ motion).reshape(-1, 3)
         closed = dd[:, 0] + 1.0 <= ACTIVE_TOL
@@ -663,16 +687,18 @@ class CRAProblem:
                                    shape=(len(row), n_sliding))
         a_ub = sp.hstack([normal_part, alpha_part], format="csr")
         cost = np.concatenate([np.ones(n_closed), np.zeros(n_sliding)])
-        outcome = linprog(cost, A_ub=a_ub, b_ub=np.zeros(a_ub.shape[0]),
-                          A_eq=a_eq, b_eq=b_eq, bounds=(0, None), method="highs")
+        return MotionLP(a_eq, a_ub, cost, closed, sliding, slide)
+
+    def exact(self, b_eq, motion):
+        """Forces solving (11) for this motion (least ``sum f_n``), or ``None``: :meth:`motion_lp` by HiGHS."""
+        lp = self.motion_lp(motion)
+        if lp is None:
+            return None
+        outcome = linprog(lp.cost, A_ub=lp.a_ub, b_ub=np.zeros(lp.a_ub.shape[0]),
+                          A_eq=lp.a_eq, b_eq=b_eq, bounds=(0, None), method="highs")
         if outcome.status != 0:
             return None
-        x = np.maximum(outcome.x, 0.0)  # HiGHS may return -1e-11 for a bound of 0
-        forces = np.zeros((len(dd), 3))
-        forces[closed, 0] = x[:n_closed]
-        alpha = x[n_closed:]
-        forces[sliding, 1:] = -alpha[:, None] * slide[sliding]
-        return forces
+        return lp.forces(outcome.x)
 
     # --- the result -------------------------------------------------------------------------------------------
 

@@ -31,7 +31,6 @@ import numpy as np
 import scipy.sparse as sp
 
 from interlock.verify.check import SOLVER_THREADS
-from interlock.verify.statics.cra_local import ACTIVE_TOL, SLIDE_TOL
 
 __all__ = ["LARGE_VERTICES", "CHECK_RTOL", "most_work", "exact", "carries", "decide_large"]
 
@@ -64,48 +63,22 @@ def most_work(problem, b_eq):
 
 def exact(problem, b_eq, motion):
     """Forces solving (11) exactly at ``motion`` (least ``sum f_n``), or ``None``: the LP of
-    ``CRAProblem.exact`` solved by Clarabel, then every residual checked (:data:`CHECK_RTOL`)."""
-    system = problem.system
-    dd = (problem.kinematic @ motion).reshape(-1, 3)
-    ratio = problem.ratio
-    if np.any(dd[:, 0] < -1.0 - 1e-6) or np.any(np.abs(dd) > ratio * (1 + 1e-6)):
+    ``CRAProblem.motion_lp`` solved by Clarabel, then every residual checked (:data:`CHECK_RTOL`)."""
+    lp = problem.motion_lp(motion)
+    if lp is None:
         return None
-    closed = dd[:, 0] + 1.0 <= ACTIVE_TOL
-    slide = dd[:, 1:]
-    sliding = closed & (np.hypot(slide[:, 0], slide[:, 1]) > SLIDE_TOL)
-    if not closed.any():
-        return None
-    n_closed, n_sliding = int(closed.sum()), int(sliding.sum())
-    normal_columns = system.a_eq[:, 0::3][:, closed]
-    slide_columns = (-(system.a_eq[:, 1::3] @ sp.diags(slide[:, 0]))
-                     - (system.a_eq[:, 2::3] @ sp.diags(slide[:, 1])))[:, sliding]
-    a_eq = sp.hstack([normal_columns, slide_columns], format="csc")
-    cone_rows = system.cone_rows
-    sides = len(cone_rows)
-    which = np.flatnonzero(sliding)
-    row = np.arange(n_sliding * sides)
-    column_of_normal = np.repeat((np.cumsum(closed) - 1)[which], sides)
-    normal_part = sp.csr_matrix((np.tile(cone_rows[:, 0], n_sliding), (row, column_of_normal)),
-                                shape=(len(row), n_closed))
-    alpha_part = sp.csr_matrix((-(slide[which] @ cone_rows[:, 1:].T).ravel(),
-                                (row, np.repeat(np.arange(n_sliding), sides))), shape=(len(row), n_sliding))
-    a_ub = sp.hstack([normal_part, alpha_part], format="csr")
-    n = n_closed + n_sliding
-    constraints = sp.vstack([a_eq, a_ub, -sp.eye(n)], format="csc")
-    right = np.concatenate([b_eq, np.zeros(a_ub.shape[0] + n)])
-    cost = np.concatenate([np.ones(n_closed), np.zeros(n_sliding)])
-    solved = _clarabel(cost, constraints, right, equalities=a_eq.shape[0])
+    n = len(lp.cost)
+    constraints = sp.vstack([lp.a_eq, lp.a_ub, -sp.eye(n)], format="csc")
+    right = np.concatenate([b_eq, np.zeros(lp.a_ub.shape[0] + n)])
+    solved = _clarabel(lp.cost, constraints, right, equalities=lp.a_eq.shape[0])
     if solved is None:
         return None
     x = np.maximum(solved[0], 0.0)
     scale = max(float(np.abs(b_eq).max()), 1e-300)
-    if (np.abs(a_eq @ x - b_eq).max() > CHECK_RTOL * scale
-            or (a_ub @ x).max(initial=0.0) > CHECK_RTOL * scale):
+    if (np.abs(lp.a_eq @ x - b_eq).max() > CHECK_RTOL * scale
+            or (lp.a_ub @ x).max(initial=0.0) > CHECK_RTOL * scale):
         return None
-    forces = np.zeros((len(dd), 3))
-    forces[closed, 0] = x[:n_closed]
-    forces[sliding, 1:] = -x[n_closed:, None] * slide[sliding]
-    return forces
+    return lp.forces(x)
 
 
 def carries(problem, b_eq, closed: np.ndarray) -> bool | None:
