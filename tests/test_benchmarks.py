@@ -5,6 +5,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -92,3 +93,26 @@ def test_the_committed_stability_results_compare_with_compas_cra():
     stability = json.loads(path.read_text())
     assert stability["quick"] is False and stability["compas_cra"]["version"] == "0.8.0"
     assert stability["agreement"]["rbe"]["compared"] >= 24 * 19
+
+
+def test_planar_interfaces_merge_the_triangles_of_a_bent_face_into_one_contact():
+    # benchmarks/armadillo_closure.py: a unit square face with one corner raised by 0.02, triangulated along
+    # opposite diagonals by the two convex blocks, meets in several polygons; merged, it is one planar contact
+    import trimesh
+
+    from benchmarks.armadillo_closure import planar_interfaces
+    from interlock.blocks import Assembly
+    from interlock.verify.statics.interfaces import interfaces
+
+    square = np.array([[0, 0], [1, 0], [1, 1], [0, 1]], dtype=float)
+    fold = np.column_stack([square, [1.0, 1.0, 1.02, 1.0]])
+    lower = trimesh.convex.convex_hull(np.vstack([np.column_stack([square, np.zeros(4)]), fold]))
+    upper = trimesh.convex.convex_hull(np.vstack([fold, np.column_stack([square, np.full(4, 2.0)])]))
+    found = interfaces(Assembly.from_meshes([lower, upper]))
+    assert len(found.contacts) >= 2
+    merged = planar_interfaces(found.contacts, found.angle)
+    assert len(merged) == 1
+    contact = merged[0]
+    assert contact.area == pytest.approx(1.0, rel=1e-3)
+    assert abs(contact.normal[2]) == pytest.approx(1.0, abs=1e-3)
+    assert np.abs((contact.vertices - contact.origin) @ contact.normal).max() < 1e-12  # planar
