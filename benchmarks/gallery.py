@@ -1,8 +1,10 @@
-"""The gallery and exports: the whole gallery's wall time, and exporting a 4,800-block RhomBlock assembly.
+"""The gallery and exports: the whole gallery's wall time, and exporting and drawing a 4,800-block RhomBlock assembly.
 
 Per gallery entry the time of each stage (generate, finite verdict, periodic
 verdict, export, render) comes from the entries' records; the export of the
-4,800-block assembly is timed per format (median of several runs).
+4,800-block assembly is timed per format, and its picture (``render``, small
+size), as medians of several runs.  (The tests assert what these write, not how
+fast.)
 """
 
 from __future__ import annotations
@@ -12,7 +14,7 @@ from pathlib import Path
 
 from benchmarks.common import main, median_time, pyplot, save_chart, write_json
 from interlock.blocks import random_hexagon, rhomblock_assembly
-from interlock.gallery import build, export
+from interlock.gallery import build, export, render
 
 
 
@@ -36,9 +38,13 @@ def run(quick: bool = False) -> dict:
             exports[suffix] = median_time(lambda: export(assembly, path), 3)
             print(f"export {len(assembly)} RhomBlocks to {suffix}: {exports[suffix]:.2f} s "
                   f"({path.stat().st_size / 1e6:.1f} MB)")
+        picture = Path(folder) / "big.png"
+        drawing = median_time(lambda: render(assembly, picture, size=(3.0, 3.0), dpi=60), 3)
+        print(f"render {len(assembly)} RhomBlocks: {drawing:.2f} s")
     payload = {"benchmark": "gallery and exports", "quick": quick, "gallery_seconds": gallery.seconds,
                "contradictions": list(gallery.contradictions), "entries": entries,
-               "export_blocks": len(assembly), "export_seconds": exports}
+               "export_blocks": len(assembly), "export_seconds": exports,
+               "render_seconds": drawing}
     write_json("gallery", payload)
     _chart(entries)
     return payload

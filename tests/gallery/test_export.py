@@ -2,7 +2,6 @@
 
 import math
 import os
-import time
 import xml.etree.ElementTree as ET
 import zipfile
 
@@ -197,15 +196,13 @@ def test_a_block_and_a_bare_mesh_export_too(tmp_path):
     assert len(back) == 1 and back.volumes[0] == pytest.approx(1.0)
 
 
-def test_4800_blocks_write_to_stl_in_under_two_seconds(tmp_path):
-    # RhomBlocks on a grid: the cost depends on the counts only, and a 4,800-lozenge tiling takes 2 s to draw
+def test_4800_blocks_write_to_stl_with_their_block_indices(tmp_path):
+    # RhomBlocks on a grid (a 4,800-lozenge tiling takes 2 s to draw); the time is benchmarks/gallery.py's
     mesh = rhomblock()
     transforms = np.tile(np.eye(4), (4800, 1, 1))
     transforms[:, :2, 3] = 2 * np.stack(np.divmod(np.arange(4800), 80), axis=1)
     assembly = Assembly([mesh], np.zeros(4800, dtype=int), transforms)
-    start = time.perf_counter()
     path = export(assembly, tmp_path / "many.stl")
-    assert time.perf_counter() - start < 2.0
     assert path.read_bytes()[:80].startswith(HEADER_MARKER + b"4800")
     records = np.fromfile(path, dtype=STL_RECORD, offset=84)
     np.testing.assert_array_equal(np.bincount(records["block"]), np.full(4800, len(mesh.faces)))
