@@ -9,13 +9,14 @@ from __future__ import annotations
 
 import contextlib
 import ctypes
+import math
 import os
 import shutil
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
-__all__ = ["atomic_write", "write_atomically", "replace_folder", "PARTIAL"]
+__all__ = ["atomic_write", "write_atomically", "replace_folder", "json_float", "PARTIAL"]
 
 #: The marker in the names of temporary files and folders (``.NAME.XXXX.partial.SUFFIX``); a killed write
 #: leaves such a file beside its target, never a damaged target.
@@ -145,3 +146,12 @@ def _umask() -> int:
     mask = os.umask(0o022)
     os.umask(mask)
     return mask
+
+
+def json_float(value: float) -> float | str:
+    """``value`` itself where JSON can hold it, else its text (``"inf"``, ``"-inf"``, ``"nan"``).
+
+    >>> json_float(0.5), json_float(float("inf"))
+    (0.5, 'inf')
+    """
+    return value if math.isfinite(value) else str(value)

@@ -11,7 +11,7 @@ import trimesh
 
 from interlock import deprecation
 from interlock.errors import AssemblyError
-from interlock.files import write_atomically
+from interlock.files import json_float, write_atomically
 
 __all__ = ["read_compas", "write_compas", "UPSTREAM_SUPPORTS", "COMPAS_DTYPES", "BLOCK_DTYPE", "GRAPH_DTYPE",
            "INFO_ATTRIBUTE"]
@@ -202,8 +202,8 @@ def _json_safe(value):
         return _json_safe(value.tolist())
     if isinstance(value, np.generic):
         return _json_safe(value.item())
-    if isinstance(value, float) and not np.isfinite(value):
-        return str(value)
+    if isinstance(value, float):
+        return json_float(value)
     if value is None or isinstance(value, (bool, int, float, str)):
         return value
     return str(value)

@@ -35,6 +35,8 @@ import scipy.optimize
 import scipy.sparse as sp
 import scipy.sparse.linalg
 
+from interlock.files import json_float
+
 __all__ = ["Margin", "assess", "rounding_tolerance", "input_precision", "row_tolerances", "margin_lower_bound",
            "tolerant_motion",
            "GRID_BITS", "DECIMAL_MIN_RTOL", "DECIMAL_MAX_RTOL", "DECIMAL_FULL_SHARE", "PRECISION_FACTOR",
@@ -88,7 +90,7 @@ class Margin:
                 f"({self.source})")
 
     def to_dict(self) -> dict:
-        return {"lower": _json(self.lower), "upper": _json(self.upper), "tolerance": self.tolerance,
+        return {"lower": json_float(self.lower), "upper": json_float(self.upper), "tolerance": self.tolerance,
                 "source": self.source}
 
 
@@ -198,10 +200,6 @@ def tolerant_motion(A: sp.csr_matrix, eps: np.ndarray, tol: float = 1e-9):
         return None, math.inf
     y = A @ x
     return x, float(max(0.0, float((-y / eps).max(initial=0.0))) / size)
-
-
-def _json(value: float):
-    return value if math.isfinite(value) else str(value)
 
 
 def rounding_tolerance(assembly) -> tuple[float, str]:

@@ -19,6 +19,7 @@ from scipy.optimize import linprog
 
 from interlock.blocks.assembly import Assembly
 from interlock.errors import InterlockError
+from interlock.files import json_float
 from interlock.verify.check import SOLVER_THREADS
 from interlock.verify.statics.interfaces import statics_contacts
 
@@ -369,7 +370,3 @@ def block_densities(density, count: int) -> np.ndarray:
         raise StabilityError(f"density must be > 0 and finite, one value or {count} (one per block); "
                              f"got shape {values.shape}")
     return values
-
-
-def json_float(value: float):
-    return value if math.isfinite(value) else str(value)
