@@ -11,7 +11,8 @@ import trimesh
 
 from interlock import deprecation
 from interlock.errors import AssemblyError
-from interlock.files import json_float, write_atomically
+from interlock.blocks.info import plain, restored
+from interlock.files import write_atomically
 
 __all__ = ["read_compas", "write_compas", "UPSTREAM_SUPPORTS", "COMPAS_DTYPES", "BLOCK_DTYPE", "GRAPH_DTYPE",
            "INFO_ATTRIBUTE"]
@@ -63,7 +64,8 @@ def read_compas(path, supports=None, progress=None) -> tuple[list[trimesh.Trimes
         raise AssemblyError(f"support keys {unknown} are not nodes of {path.name}; its node keys are "
                             f"{labels[0]}..{labels[-1]}")
     frame = sorted(index_of[key] for key in frame_keys)
-    info = {**(stored or {}), "source": [str(path)], "format": "compas", "dtype": dtype, "supports_from": origin}
+    info = {**restored(stored or {}), "source": [str(path)], "format": "compas", "dtype": dtype,
+            "supports_from": origin}
     names = [nodes[key].get("name") for key in keys]
     if any(isinstance(name, str) for name in names):
         info["names"] = names
@@ -133,7 +135,7 @@ def write_compas(assembly, path, progress=None) -> Path:
              "default_edge_attributes": {"interfaces": None}, "node": nodes, "edge": {key: {} for key in nodes},
              "max_node": len(assembly) - 1}
     document = {"dtype": COMPAS_DTYPES[0],
-                "data": {"attributes": {"name": "Assembly", INFO_ATTRIBUTE: json.dumps(_json_safe(assembly.info))},
+                "data": {"attributes": {"name": "Assembly", INFO_ATTRIBUTE: json.dumps(plain(assembly.info))},
                          "graph": {"dtype": GRAPH_DTYPE, "data": graph}}}
     _write_atomically(json.dumps(document, allow_nan=False), path)
     return path
@@ -190,23 +192,6 @@ def _outline(triangles: np.ndarray) -> list[int] | None:
         loop.append(vertex)
         vertex = following.get(vertex, start)
     return loop if len(loop) == len(following) and vertex == start else None
-
-
-def _json_safe(value):
-    """``value`` with numpy data as lists and numbers, dictionary keys as text, and other objects as text."""
-    if isinstance(value, dict):
-        return {str(k): _json_safe(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_json_safe(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return _json_safe(value.tolist())
-    if isinstance(value, np.generic):
-        return _json_safe(value.item())
-    if isinstance(value, float):
-        return json_float(value)
-    if value is None or isinstance(value, (bool, int, float, str)):
-        return value
-    return str(value)
 
 
 def _write_atomically(text: str, path: Path):

@@ -132,6 +132,39 @@ class Contact:
                 "facet_j": self.facet_j, "origin": self.origin.tolist(), "basis": self.basis.tolist(),
                 "deviation": self.deviation, "planar": self.planar, "separation": self.separation}
 
+    @classmethod
+    def from_dict(cls, data: dict) -> Contact:
+        """The contact :meth:`to_dict` describes (as read back from a file).
+
+        The arrays come back exactly; the plane polygon is rebuilt from the
+        vertices in the plane's coordinates (to rounding).  A point or line
+        contact (:meth:`at_points`: zero area, one ring) has no polygon.
+
+        >>> c = Contact.at_points(0, 1, [0, 0, 1], [[0, 0, 0], [1, 0, 0]])
+        >>> back = Contact.from_dict(c.to_dict())
+        >>> back.to_dict() == c.to_dict()
+        True
+        """
+        try:
+            arrays = [np.array(data[key], dtype=float) for key in ("normal", "vertices", "origin", "basis")]
+            sizes = [int(k) for k in data["ring_sizes"]]
+            i, j, area = int(data["i"]), int(data["j"]), float(data["area"])
+            facets = int(data["facet_i"]), int(data["facet_j"])
+            extra = float(data["deviation"]), bool(data["planar"]), float(data["separation"])
+        except (KeyError, TypeError, ValueError) as error:
+            raise ContactError(f"not a stored contact (as Contact.to_dict writes it): {error}") from None
+        normal, vertices, origin, basis = arrays
+        if (normal.shape != (3,) or vertices.ndim != 2 or vertices.shape[1:] != (3,) or origin.shape != (3,)
+                or basis.shape != (2, 3) or sum(sizes) != len(vertices) or not 0 <= i < j):
+            raise ContactError(f"a stored contact {i}-{j} has arrays of the wrong shapes or ring sizes {sizes}")
+        polygon = shapely.Polygon()
+        if area > 0 or len(sizes) > 1:
+            rings = np.split((vertices - origin) @ basis.T, np.cumsum(sizes)[:-1])
+            polygon = shapely.Polygon(rings[0], rings[1:])
+        for array in arrays:
+            array.setflags(write=False)
+        return cls(i, j, normal, vertices, area, *facets, polygon, origin, basis, *extra)
+
 
 def plane_bases(normals):
     """Orthonormal (u, v) per unit normal n with u x v = n."""

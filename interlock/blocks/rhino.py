@@ -10,6 +10,7 @@ import numpy as np
 import trimesh
 
 from interlock.blocks.classes import block_classes
+from interlock.blocks.info import plain, restored
 from interlock.blocks.lozenge import Lozenge
 from interlock.blocks.repair import merge_vertices, split_t_junctions, triangulate_polygons, unmatched_edges
 from interlock.errors import AssemblyError
@@ -128,7 +129,7 @@ def write_3dm(assembly, path, *, classes=None, version: int = RHINO_VERSION, pro
             attributes.SetUserString(key, value)
         document.Objects.AddMesh(mesh, attributes)
     document.Strings[MARKER_KEY] = f"interlock blocks={len(assembly)} fixed={len(fixed)} classes={kind}"
-    info = _plain(assembly.info)
+    info = plain(assembly.info, json=False)
     document.Strings[INFO_KEY] = repr(info)
     for key, value in info.items():
         if isinstance(key, str) and key not in (MARKER_KEY, INFO_KEY):
@@ -173,7 +174,7 @@ def read_3dm_blocks(path, *, frame_layer: str = FRAME_LAYER,
         raise RhinoError(f"{path.name} announces {expected} blocks but holds {len(blocks)}; the file is cut short "
                          "or objects were deleted")
     stored = tuple(k for k, block in enumerate(blocks) if block[3]) if (on_frame or ours) else None
-    info = _info(_string(document, INFO_KEY)) if ours else {}
+    info = restored(_info(_string(document, INFO_KEY))) if ours else {}
     info.update({"source": [str(path)], "format": "3dm"})
     return [b[1] for b in blocks], [b[2] for b in blocks], stored, info
 
@@ -222,21 +223,6 @@ def _label_text(label) -> tuple[str, str]:
     if isinstance(label, str):
         return "str", label
     return "text", str(label)
-
-
-def _plain(value):
-    """``value`` with numpy arrays and scalars as Python lists and numbers, and other objects as text."""
-    if isinstance(value, dict):
-        return {(_plain(k) if isinstance(k, (np.integer, np.floating)) else k): _plain(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return type(value)(_plain(v) for v in value)
-    if isinstance(value, np.ndarray):
-        return _plain(value.tolist())
-    if isinstance(value, np.generic):
-        return value.item()
-    if value is None or isinstance(value, (bool, int, float, str)):
-        return value
-    return str(value)
 
 
 def _write_atomically(document, path: Path, version: int):
