@@ -10,8 +10,8 @@ import numpy as np
 import trimesh
 
 from interlock import deprecation
-from interlock.errors import AssemblyError
 from interlock.blocks.info import plain, restored
+from interlock.errors import AssemblyError
 from interlock.files import write_atomically
 
 __all__ = ["read_compas", "write_compas", "UPSTREAM_SUPPORTS", "COMPAS_DTYPES", "BLOCK_DTYPE", "GRAPH_DTYPE",
