@@ -8,7 +8,7 @@ import shapely
 
 from interlock.blocks import Assembly, presets
 from interlock.blocks.contact import Contact, ContactError
-from interlock.blocks.info import CONTACT_TAG, plain, restored
+from interlock.blocks.info import CONTACT_TAG, ITEMS_TAG, plain, restored
 from interlock.gallery import export
 from interlock.verify import check, contacts
 
@@ -59,11 +59,25 @@ def test_numbers_json_cannot_hold_come_back_as_text(tmp_path, suffix):
     assert back["limit"] == "inf" and back["scores"][0] == 0.5 and back["scores"][1] == "nan"
 
 
-def test_plain_keeps_literals_for_rhino_and_text_keys_for_json():
+def test_plain_keeps_literals_for_rhino_and_pairs_for_json():
     value = {np.int64(1): (np.float64(2.5), "a")}
-    assert plain(value) == {"1": [2.5, "a"]}
+    assert plain(value) == {ITEMS_TAG: [[1, [2.5, "a"]]]}
     assert plain(value, json=False) == {1: (2.5, "a")}
     assert plain({"other": object}) == {"other": str(object)}
+    assert restored(plain({(0, 1): "edge"})) == {(0, 1): "edge"}
+
+
+@pytest.mark.parametrize("suffix", [".json", ".3dm"])
+def test_an_escher_patch_keeps_its_info_exactly(tmp_path, suffix):
+    # the deformation is keyed by edge number: JSON keys are text, so it is stored as pairs
+    if suffix == ".3dm":
+        pytest.importorskip("rhino3dm")
+    from interlock.blocks import escher_block, patch
+    from interlock.wallpaper import group
+
+    assembly = patch(escher_block(group("p4"), {0: [(0.25, 0.1)]}), 2)
+    back = Assembly.load(export(assembly, tmp_path / f"p4{suffix}")).info
+    assert all(repr(back[key]) == repr(value) for key, value in assembly.info.items())
 
 
 def test_a_damaged_stored_contact_is_a_clear_error():
@@ -77,5 +91,5 @@ def test_a_damaged_stored_contact_is_a_clear_error():
 
 
 def test_info_without_stored_contacts_is_left_as_it_is():
-    info = {"contacts": ["a text someone wrote"], "seed": 3}
-    assert restored(info) is info
+    info = {"contacts": ["a text someone wrote"], "seed": 3, "names": {"0": "a"}}
+    assert restored(info) == info
