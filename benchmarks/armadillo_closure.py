@@ -44,6 +44,7 @@ from interlock.blocks import load_compas
 from interlock.blocks.contact import Contact, plane_bases
 from interlock.verify.statics.cra import CRAProblem
 from interlock.verify.statics.cra_large import carries
+from interlock.verify.statics.equilibrium import clarabel_lp
 from interlock.verify.statics.interfaces import interfaces
 
 MU = 0.84
@@ -142,15 +143,7 @@ def _residual(problem, b_eq, motion) -> float | None:
 def _solve(cost, constraints, right, equalities: int = 0):
     """Clarabel's primal solution when it reports "Solved" or "AlmostSolved" (the closing LP on the planar model
     stops at the latter), else ``None``."""
-    import clarabel
-
-    settings = clarabel.DefaultSettings()
-    settings.verbose = False
-    n = constraints.shape[1]
-    cones = ([clarabel.ZeroConeT(equalities)] if equalities else []) + \
-        [clarabel.NonnegativeConeT(constraints.shape[0] - equalities)]
-    solution = clarabel.DefaultSolver(sp.csc_matrix((n, n)), np.asarray(cost, dtype=float), sp.csc_matrix(constraints),
-                                      np.asarray(right, dtype=float), cones, settings).solve()
+    solution = clarabel_lp(cost, constraints, right, equalities)
     return np.asarray(solution.x) if str(solution.status) in ("Solved", "AlmostSolved") else None
 
 

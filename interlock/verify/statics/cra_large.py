@@ -30,7 +30,7 @@ import time
 import numpy as np
 import scipy.sparse as sp
 
-from interlock.verify.check import SOLVER_THREADS
+from interlock.verify.statics.equilibrium import clarabel_lp
 
 __all__ = ["LARGE_VERTICES", "CHECK_RTOL", "most_work", "exact", "carries", "decide_large"]
 
@@ -95,14 +95,7 @@ def carries(problem, b_eq, closed: np.ndarray) -> bool | None:
     normal = sp.csr_matrix((-np.ones(m), (np.arange(m), 3 * np.arange(m))), shape=(m, 3 * m))
     constraints = sp.vstack([system.a_eq[:, columns], a_ub, normal], format="csc")
     right = np.concatenate([b_eq, np.zeros(constraints.shape[0] - len(b_eq))])
-    import clarabel
-
-    settings = clarabel.DefaultSettings()
-    settings.verbose = False
-    settings.max_threads = SOLVER_THREADS
-    cones = [clarabel.ZeroConeT(len(b_eq)), clarabel.NonnegativeConeT(constraints.shape[0] - len(b_eq))]
-    status = str(clarabel.DefaultSolver(sp.csc_matrix((3 * m, 3 * m)), np.tile([1.0, 0.0, 0.0], m), constraints,
-                                        right, cones, settings).solve().status)
+    status = str(clarabel_lp(np.tile([1.0, 0.0, 0.0], m), constraints, right, equalities=len(b_eq)).status)
     return True if status == "Solved" else False if status == "PrimalInfeasible" else None
 
 
@@ -151,19 +144,9 @@ def decide_large(problem, b_eq, binaries: int, timings: dict):
 
 
 def _clarabel(cost, constraints, right, equalities: int = 0):
-    """``min cost.x`` s.t. the first ``equalities`` rows of ``constraints x = right``, the rest ``<=``;
-    ``(x, z)`` (primal, dual) when Clarabel solves it, else ``None``."""
-    import clarabel
-
-    n = constraints.shape[1]
-    settings = clarabel.DefaultSettings()
-    settings.verbose = False
-    settings.max_threads = SOLVER_THREADS
-    cones = ([clarabel.ZeroConeT(equalities)] if equalities else []) + \
-        [clarabel.NonnegativeConeT(constraints.shape[0] - equalities)]
-    solution = clarabel.DefaultSolver(sp.csc_matrix((n, n)), np.asarray(cost, dtype=float),
-                                      sp.csc_matrix(constraints), np.asarray(right, dtype=float), cones,
-                                      settings).solve()
+    """``(x, z)`` (primal, dual) of :func:`~interlock.verify.statics.equilibrium.clarabel_lp` when Clarabel
+    solves it, else ``None``."""
+    solution = clarabel_lp(cost, constraints, right, equalities)
     if str(solution.status) != "Solved":
         return None
     return np.asarray(solution.x), np.asarray(solution.z)
