@@ -259,3 +259,11 @@ def test_stability_uses_the_interfaces_a_compas_file_stores(reference_data, caps
     plain = str(reference_data / "compas_cra" / "type-a.json")
     assert main(["stability", plain, "--mu", "0.84", "--interfaces", plain]) == 2
     assert "stores no interfaces" in capsys.readouterr().err
+
+
+def test_the_cli_offers_exactly_the_formats_export_writes():
+    # the CLI keeps its own list so that `interlock --help` need not import the gallery (0.7 s)
+    from interlock.cli import OUTPUT_SUFFIXES
+    from interlock.gallery.export import FORMATS
+
+    assert list(OUTPUT_SUFFIXES) == list(FORMATS)
