@@ -18,7 +18,7 @@ from pathlib import Path
 
 __all__ = ["atomic_write", "write_atomically", "replace_folder", "json_float", "PARTIAL"]
 
-#: The marker in the names of temporary files and folders (``.NAME.XXXX.partial.SUFFIX``); a killed write
+#: The marker in the names of temporary files and folders (``.NAME.<random>.partial.SUFFIX``); a killed write
 #: leaves such a file beside its target, never a damaged target.
 PARTIAL = ".partial"
 
