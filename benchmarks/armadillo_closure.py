@@ -23,7 +23,12 @@ the eigenvalues of the Gram matrix); and the exact LP of (11) at that motion,
 its equilibrium residual when the friction must lie along the slides (an LP
 with slack: 0 would prove "stable").
 
-Not part of ``python -m benchmarks`` (about a minute); run
+Then, per model, the rounds of the Coulomb fixed point
+(:mod:`interlock.verify.statics.cra_coulomb`): the same residual at each
+round's motion, the blocks left unbalanced, and the components at the bound
+``eta``; and ``cra`` itself with the default options, end to end.
+
+Not part of ``python -m benchmarks`` (about four minutes); run
 ``python -m benchmarks.armadillo_closure``.  docs/statics.md, "CRA at scale",
 quotes it.  If the planar model is adopted it belongs in
 ``interlock/verify/statics/interfaces.py``.
@@ -42,8 +47,11 @@ import shapely
 from benchmarks.common import REFERENCE_DATA, limited_blas, main, write_json
 from interlock.blocks import load_compas
 from interlock.blocks.contact import Contact, plane_bases
+from interlock.verify.statics import cra
 from interlock.verify.statics.cra import CRAProblem
-from interlock.verify.statics.cra_large import carries
+from interlock.verify.statics.cra_coulomb import coulomb_fixed_point, unbalanced
+from interlock.verify.statics.cra_large import carries, exact
+from interlock.verify.statics.cra_local import least_friction
 from interlock.verify.statics.equilibrium import clarabel_lp
 from interlock.verify.statics.interfaces import interfaces
 
@@ -52,6 +60,8 @@ MU = 0.84
 CLOSED = 1e-6
 #: Eigenvalues of the closed rows' Gram matrix below this times the largest span the null space.
 NULL_RTOL = 1e-12
+#: Rounds of the Coulomb fixed point reported per contact model (the large route runs 8; it cycles from ~8 on).
+COULOMB_ROUNDS = 12
 
 
 def planar_interfaces(contacts, angle: float) -> tuple[Contact, ...]:
@@ -124,6 +134,30 @@ def closure(assembly, contacts) -> dict:
     return row
 
 
+def coulomb_rounds(assembly, contacts, rounds: int) -> list[dict]:
+    """Per round of the Coulomb fixed point (:mod:`interlock.verify.statics.cra_coulomb`): the exact LP's
+    residual at the round's motion, the blocks it leaves unbalanced, the components at the bound ``eta``, and
+    the seconds of the round (the cone program and the exact check, not this report)."""
+    problem = CRAProblem.build(assembly, MU, contacts=contacts)
+    b_eq, _ = problem._right_hand_side(np.array([0.0, 0.0, -1.0]))
+    frugal = least_friction(problem, b_eq, interior=True)
+    rows, clock = [], [time.perf_counter()]
+
+    def check(motion):
+        forces = exact(problem, b_eq, motion)
+        seconds = time.perf_counter() - clock[0]
+        residual, blocks = unbalanced(problem, b_eq, motion)
+        dd = problem.kinematic @ motion
+        rows.append({"round": len(rows) + 1, "residual": residual, "unbalanced blocks": list(blocks),
+                     "eta active": int(np.count_nonzero(np.abs(dd) >= problem.ratio * (1 - 1e-6))),
+                     "accepted": forces is not None, "seconds": seconds})
+        clock[0] = time.perf_counter()
+        return forces
+
+    coulomb_fixed_point(problem, b_eq, frugal[:, 0], check, iterations=rounds)
+    return rows
+
+
 def _residual(problem, b_eq, motion) -> float | None:
     """Least ``|A_eq f - b|_1`` over forces allowed by (11) at ``motion`` (0: a solution; ``None``: not solved)."""
     lp = problem.motion_lp(motion)
@@ -156,10 +190,15 @@ def run(quick: bool = False) -> dict:
     with limited_blas():
         models = {"interfaces": found.contacts, "planar": planar_interfaces(found.contacts, found.angle)}
         rows = {name: closure(assembly, contacts) for name, contacts in models.items()}
+        rounds = {name: coulomb_rounds(assembly, contacts, 3 if quick else COULOMB_ROUNDS)
+                  for name, contacts in models.items()}
+        started = time.perf_counter()
+        result = cra(assembly, MU, contacts=found)
+        whole = {"status": result.status, "seconds": time.perf_counter() - started, "message": result.message}
     counts = np.bincount(list(pairs.values()))
     record = {"mu": MU, "closed tolerance": CLOSED, "contacts per block pair": {str(k): int(v) for k, v in
                                                                                enumerate(counts) if v},
-              "models": rows}
+              "models": rows, "coulomb fixed point": rounds, "cra (default interfaces, default options)": whole}
     write_json("armadillo_closure", record)
     for name, row in rows.items():
         print(name, row)

@@ -60,22 +60,44 @@ def _certificate_holds(assembly, result, gravity, density=1.0):
 # --- small facts ---------------------------------------------------------------------------------------------
 
 
+def _no_coulomb(monkeypatch):
+    """Take the Coulomb fixed point away, so that the local solvers after it are reached."""
+    from interlock.verify.statics import cra_coulomb
+
+    monkeypatch.setattr(cra_coulomb, "coulomb_fixed_point", lambda *args, **kwargs: (None, 0, None))
+
+
+def test_an_undecided_milp_ends_in_the_coulomb_fixed_point(monkeypatch):
+    from interlock.blocks import semicircular_arch
+    from interlock.verify.statics import cra_ipopt
+
+    monkeypatch.setattr(cra_ipopt, "available", lambda: False)  # convex solves only: no CasADi needed
+    arch = semicircular_arch(8)  # tilted out of its plane, no quick answer and no MILP answer in 60 s either
+    gravity = tilted_gravity("x", 4.0)
+    result = cra(arch, math.tan(math.radians(43)), gravity=gravity, time_limit=0.2)
+    assert result.status == "stable" and "Coulomb fixed point" in result.message
+    assert "did not decide" in result.message
+    _certificate_holds(arch, result, gravity)
+
+
 def test_an_undecided_milp_ends_in_a_local_solve_from_where_the_arch_settles(monkeypatch):
     from interlock.blocks import semicircular_arch
     from interlock.verify.statics import cra_ipopt
 
     monkeypatch.setattr(cra_ipopt, "available", lambda: False)  # SLSQP alone, as without CasADi
-    arch = semicircular_arch(8)  # tilted out of its plane, no quick answer and no MILP answer in 60 s either
+    _no_coulomb(monkeypatch)
+    arch = semicircular_arch(8)
     gravity = tilted_gravity("x", 4.0)
     result = cra(arch, math.tan(math.radians(43)), gravity=gravity, time_limit=0.2)
     assert result.status == "stable" and "SLSQP" in result.message and "did not decide" in result.message
     _certificate_holds(arch, result, gravity)
 
 
-def test_an_undecided_milp_ends_in_ipopt_on_problem_11_when_casadi_is_installed():
+def test_an_undecided_milp_ends_in_ipopt_on_problem_11_when_casadi_is_installed(monkeypatch):
     pytest.importorskip("casadi")
     from interlock.blocks import semicircular_arch
 
+    _no_coulomb(monkeypatch)
     arch = semicircular_arch(8)
     gravity = tilted_gravity("x", 4.0)
     result = cra(arch, math.tan(math.radians(43)), gravity=gravity, time_limit=0.2)
@@ -89,6 +111,7 @@ def test_without_casadi_an_undecided_answer_says_how_to_get_the_papers_solver(mo
 
     monkeypatch.setattr(cra_ipopt, "available", lambda: False)
     monkeypatch.setattr(cra_local, "polish", lambda *args, **kwargs: None)  # SLSQP finds nothing either
+    _no_coulomb(monkeypatch)
     result = cra(semicircular_arch(8), math.tan(math.radians(43)), gravity=tilted_gravity("x", 4.0), time_limit=0.2)
     assert result.status == "inconclusive" and 'pip install "interlock[nlp]"' in result.message
 
@@ -229,17 +252,17 @@ def test_shelf_rbe_holds_it_and_cra_does_not_claim_it_stands(reference_data):
     result = cra(assembly, 0.9, contacts=found, time_limit=1.0)
     assert result.status == "inconclusive" and "too large" in result.message
     assert "from 3 starts: Infeasible_Problem_Detected" in result.message and "proves nothing" in result.message
+    assert "the Coulomb fixed point ran 40 rounds" in result.message and "(8, 9, 10)" in result.message
 
 
-def test_shelf_stable_stands_on_a_motion_ipopt_finds_and_the_exact_lp_accepts(reference_data):
+def test_shelf_stable_stands_on_a_motion_the_coulomb_fixed_point_finds_and_the_exact_lp_accepts(reference_data):
     # Fig. 12's repaired shelf: the MILP does not decide it in 10 min (300 binaries, so the local solvers go
-    # first), IPOPT on (11) does, and the exact LP and the independent certificate confirm it: "stable" (before
-    # IPOPT: "inconclusive")
-    pytest.importorskip("casadi")
+    # first); the Coulomb fixed point (convex solves; IPOPT found it before) does, and the exact LP and the
+    # independent certificate confirm it: "stable"
     assembly, found = _model(reference_data, "shelf-stable")
     result = cra(assembly, 0.9, contacts=found, time_limit=2.0)
-    assert result.status == "stable" and "IPOPT" in result.message and "before the MILP" in result.message
-    assert result.timings["milp"] == 0.0
+    assert result.status == "stable" and "Coulomb fixed point" in result.message
+    assert "before the MILP" in result.message and result.timings["milp"] == 0.0
     _certificate_holds(assembly, result, (0.0, 0.0, -1.0))
 
 

@@ -162,7 +162,8 @@ def test_armadillo_rbe_stable_with_default_options(vault):
 
 def test_armadillo_cra_documented_result(vault):
     # docs/statics.md, "CRA at scale": RBE stable (necessary); the motion of most work is not exact (eta is
-    # active), the MILP would have ~55,000 binaries: inconclusive, saying why, never "unstable"
+    # active), the Coulomb fixed point does not converge in its rounds, the MILP would have ~55,000 binaries:
+    # inconclusive, saying why, never "unstable"
     assembly, found = vault
     result = cra(assembly, 0.84, contacts=found)
     assert result.status in ("stable", "inconclusive")
@@ -172,4 +173,6 @@ def test_armadillo_cra_documented_result(vault):
         # why (RBE is only necessary; the motion of most work fails), and how long the proof would take
         assert "RBE has an equilibrium" in result.message and "binaries" in result.message
         assert "2,424 s" in result.message  # the paper's IPOPT time for this vault (Table 5)
+        # the Coulomb fixed point's nearest motion: what it leaves unbalanced, and where
+        assert "the Coulomb fixed point ran" in result.message and "of the load unbalanced, at" in result.message
     assert result.parameters.get("route") == "large"

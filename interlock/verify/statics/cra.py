@@ -233,7 +233,9 @@ def cra(assembly, mu: float, density: float = 1.0, gravity=(0.0, 0.0, -1.0), fra
     min_slide : float
         Smallest slide of a friction-carrying vertex, as a fraction of ``eps``.
     time_limit : float
-        Seconds per MILP; a MILP that runs out of time gives "inconclusive".
+        Seconds per MILP; a MILP that runs out of time gives "inconclusive".  On models past
+        :data:`~interlock.verify.statics.cra_large.LARGE_VERTICES` contact vertices (no MILP), the
+        seconds after which the Coulomb fixed point starts no new round.
     backend : {"milp", "compas_cra"}
         "milp" decides as above.  "compas_cra" (the optional upstream package, for assemblies too
         large for the MILP) asks its local solver for a motion and verifies it with the exact LP:
@@ -339,7 +341,7 @@ class CRAProblem:
         if status_rbe == 0 and len(self.system.points) > cra_large.LARGE_VERTICES and not known:
             timings["lp"] += time.perf_counter() - started
             status, forces, motion, message = cra_large.decide_large(
-                self, b_eq, len(self.system.points) * (1 + sectors), timings)
+                self, b_eq, len(self.system.points) * (1 + sectors), timings, time_limit)
             parameters = {**self.parameters, "sectors": tried, "gravity": gravity.tolist(), "route": "large"}
             return self._result(status, message, None if forces is None else forces * total, motion, parameters,
                                 timings)
@@ -690,7 +692,10 @@ class CRAProblem:
         return MotionLP(a_eq, a_ub, cost, closed, sliding, slide)
 
     def exact(self, b_eq, motion):
-        """Forces solving (11) for this motion (least ``sum f_n``), or ``None``: :meth:`motion_lp` by HiGHS."""
+        """Forces solving (11) for this motion (least ``sum f_n``), or ``None``: :meth:`motion_lp` by HiGHS,
+        its solution checked (:func:`~interlock.verify.statics.cra_large.holds`).  HiGHS meets its tolerance
+        in its own scaling, so a vertex slipping at the cone's limit can leave a row violated by 1e-5 of the
+        load (shelf-stable); then Clarabel's interior solution, checked the same way, decides."""
         lp = self.motion_lp(motion)
         if lp is None:
             return None
@@ -698,7 +703,8 @@ class CRAProblem:
                           A_eq=lp.a_eq, b_eq=b_eq, bounds=(0, None), method="highs")
         if outcome.status != 0:
             return None
-        return lp.forces(outcome.x)
+        x = np.maximum(outcome.x, 0.0)
+        return lp.forces(x) if cra_large.holds(lp, x, b_eq) else cra_large.exact(self, b_eq, motion)
 
     # --- the result -------------------------------------------------------------------------------------------
 

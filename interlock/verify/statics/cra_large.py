@@ -19,7 +19,10 @@ are out of reach, and HiGHS' simplex takes about a minute per LP.  Here:
    multipliers are a frictionless equilibrium that it realises whenever the
    bound ``eta`` is nowhere active; where it is active, the multipliers are
    forces at displacements of ``eta``, which (11) does not allow).
-3. Otherwise "inconclusive", saying what was tried and why the exact routes do
+3. The Coulomb fixed point (:mod:`interlock.verify.statics.cra_coulomb`): convex
+   frictional-contact problems whose solutions solve (11) once the friction
+   thresholds obey Coulomb's law, each motion checked by :func:`exact`.
+4. Otherwise "inconclusive", saying what was tried and why the exact routes do
    not reach the model, with the size of the MILP it would take.
 """
 
@@ -30,9 +33,10 @@ import time
 import numpy as np
 import scipy.sparse as sp
 
+from interlock.verify.statics import cra_coulomb, cra_local
 from interlock.verify.statics.equilibrium import clarabel_lp
 
-__all__ = ["LARGE_VERTICES", "CHECK_RTOL", "most_work", "exact", "carries", "decide_large"]
+__all__ = ["LARGE_VERTICES", "CHECK_RTOL", "most_work", "exact", "holds", "carries", "decide_large"]
 
 #: Contact vertices above which :func:`~interlock.verify.statics.cra.cra` takes this route (the shelves of
 #: Fig. 7 and 12 have 60-90, the 36-voussoir arch 148, the armadillo vault 10,901).
@@ -41,6 +45,8 @@ LARGE_VERTICES = 2000
 #: (equilibrium, ``f_n >= 0``, ``alpha >= 0``, the friction pyramid) is at most this times the load
 #: (forces in units of the free blocks' weight): HiGHS' feasibility tolerance is 1e-7.
 CHECK_RTOL = 1e-7
+#: Most rounds of the Coulomb fixed point on a large model (about 5 s each on the armadillo vault).
+LARGE_COULOMB_ROUNDS = 8
 #: Closed vertices are those with ``dd_n + eps <= SNAP * eps`` in an interior-point motion (then made exact).
 SNAP = 1e-6
 
@@ -74,11 +80,15 @@ def exact(problem, b_eq, motion):
     if solved is None:
         return None
     x = np.maximum(solved[0], 0.0)
+    return lp.forces(x) if holds(lp, x, b_eq) else None
+
+
+def holds(lp, x, b_eq) -> bool:
+    """Whether ``x >= 0`` solves the LP of (11) at a motion (``lp``: a ``MotionLP``) to :data:`CHECK_RTOL`
+    times the load: equilibrium and the friction pyramid."""
     scale = max(float(np.abs(b_eq).max()), 1e-300)
-    if (np.abs(lp.a_eq @ x - b_eq).max() > CHECK_RTOL * scale
-            or (lp.a_ub @ x).max(initial=0.0) > CHECK_RTOL * scale):
-        return None
-    return lp.forces(x)
+    return bool(np.abs(lp.a_eq @ x - b_eq).max() <= CHECK_RTOL * scale
+                and (lp.a_ub @ x).max(initial=0.0) <= CHECK_RTOL * scale)
 
 
 def carries(problem, b_eq, closed: np.ndarray) -> bool | None:
@@ -99,9 +109,10 @@ def carries(problem, b_eq, closed: np.ndarray) -> bool | None:
     return True if status == "Solved" else False if status == "PrimalInfeasible" else None
 
 
-def decide_large(problem, b_eq, binaries: int, timings: dict):
+def decide_large(problem, b_eq, binaries: int, timings: dict, time_limit: float = np.inf):
     """``(status, forces, motion, message)`` for a large model (see the module docstring); forces in units of
-    the free blocks' weight, the motion in units of ``eps``.  ``binaries``: the MILP's size, for the message."""
+    the free blocks' weight, the motion in units of ``eps``.  ``binaries``: the MILP's size, for the message;
+    ``time_limit``: seconds after which the Coulomb fixed point starts no new round."""
     started = time.perf_counter()
     motion, _ = most_work(problem, b_eq)
     found = None
@@ -119,12 +130,24 @@ def decide_large(problem, b_eq, binaries: int, timings: dict):
         for candidate in (snapped, motion):
             forces = exact(problem, b_eq, candidate)
             if forces is not None:
-                found = (candidate, forces)
+                found = (candidate, forces, "the motion of most work")
                 break
+    coulomb = "the Coulomb fixed point did not start (no least-friction equilibrium)"
+    if found is None:
+        frugal = cra_local.least_friction(problem, b_eq, interior=True)
+        if frugal is not None:
+            spent = time.perf_counter() - started
+            result, rounds, last = cra_coulomb.coulomb_fixed_point(
+                problem, b_eq, frugal[:, 0], lambda m: exact(problem, b_eq, m),
+                iterations=LARGE_COULOMB_ROUNDS, time_limit=time_limit - spent)
+            if result is not None:
+                found = (*result, f"the Coulomb fixed point ({rounds} convex frictional-contact solves)")
+            else:
+                coulomb = cra_coulomb.describe(problem, b_eq, rounds, last)
+    timings["lp"] = timings.get("lp", 0.0) + time.perf_counter() - started
     if found is not None:
-        timings["lp"] = timings.get("lp", 0.0) + time.perf_counter() - started
-        motion, forces = found
-        return "stable", forces, motion, "equilibrium realised by the motion of most work (large model; exact check)"
+        motion, forces, how = found
+        return "stable", forces, motion, f"equilibrium realised by {how} (large model; exact check)"
     if motion is None:
         why = "the LP of most work did not solve"
     else:
@@ -135,10 +158,9 @@ def decide_large(problem, b_eq, binaries: int, timings: dict):
                + {False: "cannot carry the load even with friction anywhere in the cone",
                   True: "could carry the load, but not with friction against its slides",
                   None: "were not decided to carry the load"}[carried] + ")")
-    timings["lp"] = timings.get("lp", 0.0) + time.perf_counter() - started
     return ("inconclusive", None, None,
-            f"RBE has an equilibrium (necessary, not sufficient); {why}; the MILP relaxation would have "
-            f"{binaries} binaries, beyond the exact route (the shelf's 380 are undecided in 10 min); a local "
+            f"RBE has an equilibrium (necessary, not sufficient); {why}; {coulomb}; the MILP relaxation would "
+            f"have {binaries} binaries, beyond the exact route (the shelf's 380 are undecided in 10 min); a local "
             f"solve of (11) as in the paper (compas_cra's IPOPT: 2,424 s on the armadillo, Table 5; "
             f"cra(..., backend='compas_cra') checks its motion exactly) was not tried")
 

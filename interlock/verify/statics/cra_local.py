@@ -9,8 +9,9 @@ candidate motions; none of them proves anything by itself:
 - :func:`settled_motion`: where the assembly settles under its load (LPs);
 - :func:`snap`: an interior-point motion with its nearly closed vertices shut (an LP);
 - :func:`polish`: (11) solved locally with the closed set fixed (SLSQP);
-- :func:`verify_local` and :func:`last_resort`: the chain after a local solver
-  (IPOPT through :mod:`interlock.verify.statics.cra_ipopt`, then SLSQP).
+- :func:`verify_local` and :func:`last_resort`: the chain of local solvers (the
+  Coulomb fixed point of :mod:`interlock.verify.statics.cra_coulomb`, IPOPT
+  through :mod:`interlock.verify.statics.cra_ipopt`, then SLSQP).
 
 All work in the solver's units: forces over the free blocks' weight,
 lengths of the motion over ``eps`` (``problem.kinematic`` maps a motion to the
@@ -26,7 +27,8 @@ import scipy.sparse as sp
 from scipy.linalg import null_space
 from scipy.optimize import linprog, minimize
 
-from interlock.verify.statics import cra_ipopt
+from interlock.verify.statics import cra_coulomb, cra_ipopt
+from interlock.verify.statics.equilibrium import clarabel_lp
 
 __all__ = ["least_friction", "realise", "realise_least_friction", "settled_motion", "snap", "polish",
            "verify_local", "last_resort"]
@@ -51,15 +53,23 @@ LEAST_FRICTION_NORMAL = 1e-3
 def last_resort(problem, b_eq, rbe_forces, most_work, timings):
     """``((motion, forces), how)`` of a local solve of (11) that the exact LP accepts, or ``(None, why not)``.
 
-    If CasADi is installed, IPOPT on the whole problem (11) as in the paper
+    In turn: the Coulomb fixed point (:func:`~interlock.verify.statics.cra_coulomb.coulomb_fixed_point`) from
+    the least-friction equilibrium; if CasADi is installed, IPOPT on the whole problem (11) as in the paper
     (:mod:`interlock.verify.statics.cra_ipopt`) from the motion of most work with the least-friction forces, from
     rest, and from where the assembly settles (:func:`settled_motion`); then SLSQP from where it settles
     with those vertices kept closed (up to :data:`LAST_RESORT_LIMIT` of them).
     """
+    frugal = least_friction(problem, b_eq)
+    coulomb = "the Coulomb fixed point did not start (no least-friction equilibrium)"
+    if frugal is not None:
+        found, rounds, last = cra_coulomb.coulomb_fixed_point(problem, b_eq, frugal[:, 0],
+                                                              lambda motion: problem.exact(b_eq, motion))
+        if found is not None:
+            return found, f"the Coulomb fixed point ({rounds} convex frictional-contact solves)"
+        coulomb = cra_coulomb.describe(problem, b_eq, rounds, last)
     settled = settled_motion(problem, b_eq)
     statuses = []
     if cra_ipopt.available():
-        frugal = least_friction(problem, b_eq)
         starts = [(most_work, frugal), (None, None), (settled, frugal)]
         started = time.perf_counter()
         try:
@@ -76,9 +86,10 @@ def last_resort(problem, b_eq, rbe_forces, most_work, timings):
     if exact is not None:
         return (polished, exact), "a local solve (SLSQP) from where the assembly settles"
     if not statuses:
-        return None, f"no local solve found one (SLSQP; {cra_ipopt.MISSING_MESSAGE} for the paper's solver)"
-    return None, (f"no local solve found one (SLSQP, and IPOPT, the paper's solver, from {len(statuses)} starts: "
-                  f"{', '.join(statuses)}; which proves nothing)")
+        return None, (f"no local solve found one ({coulomb}; SLSQP; {cra_ipopt.MISSING_MESSAGE} for the paper's "
+                      f"solver)")
+    return None, (f"no local solve found one ({coulomb}; SLSQP, and IPOPT, the paper's solver, from {len(statuses)} "
+                  f"starts: {', '.join(statuses)}; which proves nothing)")
 
 
 def verify_local(problem, b_eq, motion, forces):
@@ -123,7 +134,7 @@ def snap(problem, motion, tolerance: float = SNAP_TOL):
     return outcome.x[:n_q] if outcome.status == 0 else None
 
 
-def least_friction(problem, b_eq):
+def least_friction(problem, b_eq, interior: bool = False):
     """The RBE equilibrium with the least friction, or ``None``: minimise ``sum_v |f_u| + |f_v|`` (in each
     contact's ``(u, v)`` basis) plus ``LEAST_FRICTION_NORMAL`` times ``sum f_n``.
 
@@ -133,6 +144,9 @@ def least_friction(problem, b_eq):
     (:func:`realise`) is easy to find.  The 36-voussoir arch: 68 of 148
     vertices carry friction, and a motion realises it exactly (RBE's
     least-force equilibrium is not realisable).
+
+    ``interior=True`` solves it by Clarabel instead of HiGHS' simplex, which
+    takes over ten minutes on the armadillo vault's 10,901 vertices.
     """
     system = problem.system
     s = len(system.points)
@@ -146,6 +160,11 @@ def least_friction(problem, b_eq):
                       sp.hstack([tangential, -identity]), sp.hstack([-tangential, -identity])], format="csr")
     a_eq = sp.hstack([system.a_eq, sp.csr_matrix((system.a_eq.shape[0], 2 * s))], format="csr")
     cost = np.concatenate([np.tile([LEAST_FRICTION_NORMAL, 0.0, 0.0], s), np.ones(2 * s)])
+    if interior:
+        normal = sp.csr_matrix((-np.ones(s), (np.arange(s), 3 * np.arange(s))), shape=(s, 5 * s))
+        solution = clarabel_lp(cost, sp.vstack([a_eq, a_ub, normal], format="csc"),
+                               np.concatenate([b_eq, np.zeros(a_ub.shape[0] + s)]), equalities=len(b_eq))
+        return np.asarray(solution.x)[:3 * s].reshape(-1, 3) if str(solution.status) == "Solved" else None
     bounds = np.vstack([system.bounds, np.tile([0.0, np.inf], (2 * s, 1))])
     outcome = linprog(cost, A_ub=a_ub, b_ub=np.zeros(a_ub.shape[0]), A_eq=a_eq, b_eq=b_eq, bounds=bounds,
                       method="highs")

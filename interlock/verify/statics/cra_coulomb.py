@@ -1,0 +1,230 @@
+"""CRA's problem (11) through Coulomb friction: a fixed point of convex frictional-contact problems.
+
+A motion of the blocks that *settles* under the load, with friction that
+resists every slide, realises an equilibrium the way (11) asks. This module
+finds such motions with convex problems. Nothing here proves anything by
+itself: every motion goes to the exact LP of (11) (``CRAProblem.exact``), and
+only that LP's "feasible" means "stable".
+
+**The convex problem (Tresca friction with elastic slip).** Fix a threshold
+``s_v >= 0`` per contact vertex and a stiffness ``k > 0``. In the solver's
+units (motions over ``eps``, forces over the free blocks' weight), solve
+
+    min_q  b^T q + sum_v h_v(dd_t,v)   s.t.  dd_n + 1 >= 0,  |dd| <= eta / eps,        (T)
+
+where ``dd = A_eq^T q`` (Eq. (8)), ``-b^T q`` is the work of the load, and
+``h_v`` is the Huber function ``k |x|^2 / 2`` for ``|x| <= s_v / k`` and
+``s_v |x| - s_v^2 / (2 k)`` beyond. It is a second-order cone program
+(``h_v(x) = min_y k |y|^2 / 2 + s_v |x - y|``), solved by Clarabel.
+
+**Why its solutions solve (11).** Let ``f_n`` be the multipliers of
+``dd_n + 1 >= 0`` and ``f_t = -grad h_v(dd_t)``. The optimality conditions of
+(T), when no bound ``|dd| <= eta / eps`` is active, are:
+
+- equilibrium ``A_eq f = b``: Eq. (7b);
+- ``f_n >= 0``, ``dd_n + 1 >= 0``, ``f_n (dd_n + 1) = 0``: Eq. (10);
+- ``f_t = -alpha dd_t`` with ``alpha = k`` (stick) or ``s_v / |dd_t|``
+  (slip), so ``alpha >= 0``: Eq. (9);
+- ``|f_t| <= s_v``.
+
+So if ``s_v <= m f_n,v`` at every vertex, with ``m`` the radius of the round
+cone inside the friction pyramid (``mu`` for the paper's circumscribed
+pyramid, ``mu cos(pi / sides)`` for the inner one), the forces lie in the
+pyramid (Eqs. (4)-(5)) and ``(f, q)`` solves (11). Coulomb's law
+``s_v = m f_n,v`` is therefore a fixed point, and :func:`coulomb_fixed_point`
+iterates towards it: ``s <- (1 - damping) s + damping m f_n``, from the normal
+forces of the least-friction equilibrium. An active bound ``eta`` spoils the
+argument (its multipliers act as forces that (11) does not have): the exact LP
+then decides.
+
+The iteration need not converge; where it does (shelf-stable, Fig. 12:
+residual 1e-8 after 13 rounds, accepted after 16), it proves "stable" with
+linear and conic solves only. On the Armadillo vault it does not: see
+docs/statics.md, "CRA at scale".
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from interlock.verify.statics.equilibrium import clarabel_lp
+
+__all__ = ["COULOMB_ITERATIONS", "COULOMB_DAMPING", "TrescaSolution", "tresca", "coulomb_fixed_point",
+           "unbalanced", "describe"]
+
+#: Most rounds of the fixed point (shelf-stable is accepted after 16).
+COULOMB_ITERATIONS = 40
+#: Weight of the new thresholds ``m f_n`` in each round (1: plain fixed point; it oscillates on shelf-stable).
+COULOMB_DAMPING = 0.5
+#: Unbalanced load per free block (in units of the free blocks' weight) below which a block counts as balanced.
+BALANCED_RTOL = 1e-7
+
+
+@dataclass(frozen=True)
+class TrescaSolution:
+    """A solution of the convex problem (T) (module docstring), in the solver's units.
+
+    Attributes
+    ----------
+    motion : ndarray (6 f,)
+        ``q``, twists of the free blocks over ``eps``.
+    forces : ndarray (s, 3)
+        ``(f_n, f_u, f_v)`` per vertex: the multipliers of ``dd_n + 1 >= 0`` and ``-grad h_v``.
+    eta_active : int
+        Components of ``dd`` at the bound ``eta / eps``; nonzero means the forces need not balance the load.
+    status : str
+        Clarabel's status.
+    """
+
+    motion: np.ndarray
+    forces: np.ndarray
+    eta_active: int
+    status: str
+
+
+def tresca(problem, b_eq, thresholds, stiffness: float) -> TrescaSolution | None:
+    """Solve (T) of the module docstring for ``thresholds`` ``s_v`` and ``stiffness`` ``k``; ``None`` if
+    Clarabel does not solve it (unbounded: the thresholds cannot hold the load).
+
+    Unknowns ``(q, y, t)``: ``y_v`` is the elastic part of the slide, ``t_v >= |dd_t,v - y_v|`` (a second-order
+    cone per vertex), and the cost is ``b^T q + sum k |y_v|^2 / 2 + s_v t_v``.
+
+    Examples
+    --------
+    A unit cube on a fixed one, thresholds from a normal force of its weight and ``mu = 0.5``: it settles by
+    ``eps`` and carries its weight on its four corners.
+
+    >>> import numpy as np, trimesh
+    >>> from interlock.blocks import Assembly
+    >>> from interlock.verify.statics.cra import CRAProblem
+    >>> cubes = [trimesh.creation.box(bounds=[[0, 0, z], [1, 1, z + 1]]) for z in (0, 1)]
+    >>> problem = CRAProblem.build(Assembly.from_meshes(cubes, frame=[0]), 0.5)
+    >>> b_eq, _ = problem._right_hand_side(np.array([0.0, 0.0, -1.0]))
+    >>> solved = tresca(problem, b_eq, np.full(4, 0.125), 0.25)
+    >>> round(float(solved.motion[2]), 6), round(float(solved.forces[:, 0].sum()), 6), solved.eta_active
+    (-1.0, 1.0, 0)
+    """
+    import clarabel
+
+    d = problem.kinematic.tocsr()
+    s, n_q = d.shape[0] // 3, d.shape[1]
+    if s == 0:
+        return None
+    ratio = problem.ratio
+    rows = np.arange(s)
+    # second-order cone rows per vertex, in the order (t_v, x_u - y_u, x_v - y_v)
+    place = [sp.csr_matrix((np.ones(s), (3 * rows + a, rows)), shape=(3 * s, s)) for a in range(3)]
+    slides = place[1] @ d[1::3] + place[2] @ d[2::3]
+    constraints = sp.vstack([
+        sp.hstack([-d[0::3], sp.csr_matrix((s, 3 * s))]),  # dd_n + 1 >= 0
+        sp.hstack([d, sp.csr_matrix((3 * s, 3 * s))]),  # dd <= ratio
+        sp.hstack([-d, sp.csr_matrix((3 * s, 3 * s))]),  # -dd <= ratio
+        sp.hstack([-slides, place[1], place[2], -place[0]]),  # (t, x - y) in the cone
+    ], format="csc")
+    right = np.concatenate([np.ones(s), np.full(6 * s, ratio), np.zeros(3 * s)])
+    quadratic = sp.block_diag([sp.csc_matrix((n_q, n_q)), stiffness * sp.eye(2 * s), sp.csc_matrix((s, s))],
+                              format="csc")
+    cost = np.concatenate([b_eq, np.zeros(2 * s), thresholds])
+    settings = clarabel.DefaultSettings()
+    settings.verbose = False
+    solution = clarabel.DefaultSolver(quadratic, cost, constraints, right,
+                                      [clarabel.NonnegativeConeT(7 * s)] + [clarabel.SecondOrderConeT(3)] * s,
+                                      settings).solve()
+    status = str(solution.status)
+    if status not in ("Solved", "AlmostSolved"):
+        return None
+    x, z = np.asarray(solution.x), np.asarray(solution.z)
+    motion = x[:n_q]
+    elastic = x[n_q:n_q + 2 * s].reshape(2, s).T
+    forces = np.column_stack([z[:s], -stiffness * elastic])
+    eta_active = int(np.count_nonzero(np.abs(d @ motion) >= ratio * (1 - 1e-6)))
+    return TrescaSolution(motion, forces, eta_active, status)
+
+
+def coulomb_fixed_point(problem, b_eq, normal_forces, check, iterations: int = COULOMB_ITERATIONS,
+                        damping: float = COULOMB_DAMPING, time_limit: float = np.inf):
+    """Iterate (T) towards Coulomb's law (module docstring) and return ``(found, rounds, last)``.
+
+    Parameters
+    ----------
+    problem : CRAProblem
+    b_eq : ndarray (6 f,)
+        The load, ``-p`` over the free blocks' weight.
+    normal_forces : ndarray (s,)
+        Normal forces of an RBE equilibrium (the least-friction one): the first thresholds are ``m`` times them.
+    check : callable
+        ``check(motion)`` -> forces solving (11) exactly at ``motion``, or ``None`` (the exact LP).
+    iterations, damping : int, float
+        Most rounds, and the weight of the new thresholds in each (:data:`COULOMB_ITERATIONS`,
+        :data:`COULOMB_DAMPING`).
+    time_limit : float
+        Seconds after which no new round starts.
+
+    Returns
+    -------
+    found : (motion, forces) or None
+        A motion the exact LP accepts, with its forces.
+    rounds : int
+        Rounds run.
+    last : ndarray (6 f,) or None
+        The last motion tried, for a report of what it leaves unbalanced (:func:`unbalanced`).
+
+    The stiffness is ``|b|_1 / s``: a vertex carrying an average share of the load
+    slides by about ``eps`` before it slips.
+    """
+    started = time.perf_counter()
+    radius = -float(problem.system.cone_rows[:, 0].max())  # the round cone inside the pyramid
+    s = len(normal_forces)
+    stiffness = float(np.abs(b_eq).sum()) / max(s, 1)
+    thresholds = radius * np.maximum(normal_forces, 0.0)
+    last, rounds = None, 0
+    while rounds < iterations and time.perf_counter() - started < time_limit:
+        rounds += 1
+        solved = tresca(problem, b_eq, thresholds, stiffness)
+        if solved is None:
+            break
+        last = solved.motion
+        forces = check(solved.motion)
+        if forces is not None:
+            return (solved.motion, forces), rounds, last
+        thresholds = (1.0 - damping) * thresholds + damping * radius * np.maximum(solved.forces[:, 0], 0.0)
+    return None, rounds, last
+
+
+def unbalanced(problem, b_eq, motion):
+    """``(residual, blocks)``: the least ``|A_eq f - b|_1`` over forces that (11) allows at ``motion``, as a
+    fraction of ``|b|_1``, and the free blocks (assembly indices) left unbalanced; ``(None, ())`` if the motion
+    leaves the bounds of (11) or Clarabel does not solve the LP.  0 would mean "stable"."""
+    lp = problem.motion_lp(motion)
+    if lp is None:
+        return None, ()
+    n, m = lp.a_eq.shape[1], lp.a_eq.shape[0]
+    identity = sp.eye(m)
+    equalities = sp.hstack([lp.a_eq, identity, -identity])
+    inequalities = sp.vstack([sp.hstack([lp.a_ub, sp.csr_matrix((lp.a_ub.shape[0], 2 * m))]), -sp.eye(n + 2 * m)])
+    cost = np.concatenate([np.zeros(n), np.ones(2 * m)])
+    solution = clarabel_lp(cost, sp.vstack([equalities, inequalities], format="csc"),
+                           np.concatenate([b_eq, np.zeros(inequalities.shape[0])]), equalities=m)
+    if str(solution.status) not in ("Solved", "AlmostSolved"):
+        return None, ()
+    slack = np.asarray(solution.x)[n:]
+    per_block = np.abs(slack[:m] - slack[m:]).reshape(-1, 6).sum(axis=1)
+    scale = float(np.abs(b_eq).sum())
+    blocks = np.asarray(problem.system.free)[per_block > BALANCED_RTOL * scale]
+    return float(slack.sum()) / scale, tuple(int(k) for k in blocks)
+
+
+def describe(problem, b_eq, rounds: int, last) -> str:
+    """What the Coulomb fixed point left undone after ``rounds``, ending at motion ``last``, in words."""
+    if last is None:
+        return f"the Coulomb fixed point stopped after {rounds} rounds: its convex problem had no solution"
+    residual, blocks = unbalanced(problem, b_eq, last)
+    if residual is None:
+        return f"the Coulomb fixed point ran {rounds} rounds; its last motion leaves the bounds of (11)"
+    shown = ", ".join(map(str, blocks[:8])) + (", ..." if len(blocks) > 8 else "")
+    return (f"the Coulomb fixed point ran {rounds} rounds; at its last motion the exact LP leaves "
+            f"{residual:.2g} of the load unbalanced, at {len(blocks)} blocks ({shown})")

@@ -1,0 +1,116 @@
+"""The Coulomb fixed point for CRA's problem (11) (interlock.verify.statics.cra_coulomb)."""
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy.spatial.transform import Rotation
+
+from interlock.blocks import Assembly, load_compas
+from interlock.verify import contacts
+from interlock.verify.statics import cra, cra_coulomb, cra_ipopt, cra_local, tilted_gravity
+from interlock.verify.statics.cra import CRAProblem
+from tests.verify.test_stability import _stack
+
+
+def _problem(assembly, mu, gravity):
+    problem = CRAProblem.build(assembly, mu)
+    b_eq, _ = problem._right_hand_side(np.asarray(gravity, dtype=float))
+    return problem, b_eq
+
+
+def _fixed_point(problem, b_eq):
+    frugal = cra_local.least_friction(problem, b_eq)
+    return cra_coulomb.coulomb_fixed_point(problem, b_eq, frugal[:, 0], lambda m: problem.exact(b_eq, m))
+
+
+def test_tresca_solution_is_an_equilibrium_with_friction_against_the_slide():
+    # A cube on a fixed cube, gravity tilted by 20 degrees (needs friction tan 20 = 0.36 < mu = 0.5): the
+    # optimality conditions of (T) are (7b), (9) and (10), whatever the thresholds, when eta is inactive.
+    problem, b_eq = _problem(_stack(), 0.5, tilted_gravity("x", 20))
+    solved = cra_coulomb.tresca(problem, b_eq, np.full(4, 0.2), 0.25)
+    assert solved is not None and solved.eta_active == 0
+    f = solved.forces
+    assert problem.system.a_eq @ f.ravel() == pytest.approx(b_eq, abs=1e-7)  # Eq. (7b)
+    dd = (problem.kinematic @ solved.motion).reshape(-1, 3)
+    assert np.all(dd[:, 0] >= -1 - 1e-7) and np.all(f[:, 0] >= -1e-9)
+    assert np.abs(f[:, 0] * (dd[:, 0] + 1)).max() < 1e-7  # Eq. (10)
+    slide, friction = dd[:, 1:], f[:, 1:]
+    assert np.abs(slide[:, 0] * friction[:, 1] - slide[:, 1] * friction[:, 0]).max() < 1e-7  # Eq. (9): parallel
+    assert np.all(np.einsum("ij,ij->i", slide, friction) < 0)  # and against the slide
+    assert np.all(np.hypot(*friction.T) <= 0.2 + 1e-7)  # |f_t| <= s_v
+
+
+def test_tresca_is_unbounded_when_the_thresholds_cannot_hold_the_load():
+    # Tilted by 30 degrees the cube needs friction tan 30 = 0.58 of its normal force; thresholds of 0.5 cannot
+    # hold it, so the load does unbounded work (up to eta) and the multipliers of eta carry the rest
+    problem, b_eq = _problem(_stack(), 0.5, tilted_gravity("x", 30))
+    normal, tangential = b_eq[2], b_eq[1]  # the load's components across and along the contact
+    assert tangential / normal == pytest.approx(math.tan(math.radians(30)))
+    solved = cra_coulomb.tresca(problem, b_eq, np.full(4, 0.5 * normal / 4), 0.25)
+    assert solved is None or solved.eta_active > 0
+    held = cra_coulomb.tresca(problem, b_eq, np.full(4, 0.6 * normal / 4), 0.25)  # mu = 0.6 > tan 30 holds it
+    assert held is not None and held.eta_active == 0
+
+
+@pytest.mark.parametrize("angle", [0.0, 10.0, 20.0, 26.0])
+def test_fixed_point_proves_a_cube_on_a_slope_stable(angle):
+    # friction angle of mu = 0.5: 26.57 degrees; the exact LP accepts the motion, which slides down the slope
+    problem, b_eq = _problem(_stack(), 0.5, tilted_gravity("x", angle))
+    found, rounds, last = _fixed_point(problem, b_eq)
+    assert found is not None and rounds >= 1
+    motion, forces = found
+    assert np.array_equal(motion, last)
+    assert problem.system.a_eq @ forces.ravel() == pytest.approx(b_eq, abs=1e-7)
+    down = tilted_gravity("x", angle)
+    down[2] = 0.0
+    assert motion[:3] @ down >= 0.0  # the cube moves with the tangential load, never against it
+    assert cra_coulomb.unbalanced(problem, b_eq, motion) == (pytest.approx(0.0, abs=1e-7), ())
+
+
+@settings(max_examples=10, deadline=None)
+@given(st.integers(0, 2 ** 32 - 1), st.floats(0.01, 100.0))
+def test_fixed_point_invariant_under_rigid_motion_and_scale(seed, scale):
+    # the same stack and load, turned, moved and scaled together: the fixed point still proves it stable and
+    # closes the same 4 vertices (motions are in units of eps, a fraction of the model's size)
+    turn = Rotation.random(random_state=seed)
+    shift = np.random.default_rng(seed).normal(size=3) * 10
+    meshes = [m.copy().apply_scale(scale).apply_transform(_affine(turn.as_matrix(), shift))
+              for m in _stack().meshes]
+    problem, b_eq = _problem(Assembly.from_meshes(meshes, frame=[0]), 0.5, turn.apply(tilted_gravity("x", 20)))
+    found, _, _ = _fixed_point(problem, b_eq)
+    assert found is not None
+    dd = (problem.kinematic @ found[0]).reshape(-1, 3)
+    assert int((dd[:, 0] + 1 <= 1e-7).sum()) == 4
+
+
+def _affine(rotation, shift):
+    matrix = np.eye(4)
+    matrix[:3, :3], matrix[:3, 3] = rotation, shift
+    return matrix
+
+
+def test_shelf_stable_is_proved_without_ipopt(reference_data, monkeypatch):
+    # Fig. 12's repaired shelf: IPOPT used to be the only route that found its motion (the MILP's 300
+    # binaries are undecided in 10 min); the fixed point finds one the exact LP accepts, with CasADi absent
+    monkeypatch.setattr(cra_ipopt, "available", lambda: False)
+    assembly = load_compas(reference_data / "compas_cra" / "shelf-stable.json")
+    result = cra(assembly, 0.9, contacts=contacts(assembly), time_limit=2.0)
+    assert result.status == "stable" and "Coulomb fixed point" in result.message
+    assert result.timings["milp"] == 0.0 and "ipopt" not in result.timings
+
+
+def test_shelf_fixed_point_names_the_blocks_it_cannot_balance(reference_data):
+    # Fig. 7's shelf (3DEC and the paper: its blocks 9 and 10 slide): no fixed point is reached, and the nearest
+    # motion leaves load unbalanced at the top three blocks; which proves nothing ("inconclusive" stays)
+    assembly = load_compas(reference_data / "compas_cra" / "shelf.json")
+    problem = CRAProblem.build(assembly, 0.9, contacts=contacts(assembly))
+    b_eq, _ = problem._right_hand_side(np.array([0.0, 0.0, -1.0]))
+    found, rounds, last = _fixed_point(problem, b_eq)
+    assert found is None and rounds == cra_coulomb.COULOMB_ITERATIONS
+    residual, blocks = cra_coulomb.unbalanced(problem, b_eq, last)
+    assert residual > 1e-3 and blocks == (8, 9, 10)
+    words = cra_coulomb.describe(problem, b_eq, rounds, last)
+    assert f"ran {rounds} rounds" in words and "at 3 blocks (8, 9, 10)" in words
