@@ -128,7 +128,7 @@ def closure(assembly, contacts) -> dict:
     row.update({"closed": int(closed.sum()), "closed fraction": float(closed.mean()),
                 "closed carry the load": carries(problem, b_eq, closed),
                 "motions keeping them closed (dimension)": int((eigenvalues < NULL_RTOL * eigenvalues[-1]).sum()),
-                "exact LP residual at that motion": _residual(problem, b_eq, motion),
+                "exact LP residual at that motion": unbalanced(problem, b_eq, motion)[0],
                 "load (|b|_1, the residual's scale)": float(np.abs(b_eq).sum()),
                 "seconds": time.perf_counter() - started})
     return row
@@ -156,22 +156,6 @@ def coulomb_rounds(assembly, contacts, rounds: int) -> list[dict]:
 
     coulomb_fixed_point(problem, b_eq, frugal[:, 0], check, iterations=rounds)
     return rows
-
-
-def _residual(problem, b_eq, motion) -> float | None:
-    """Least ``|A_eq f - b|_1`` over forces allowed by (11) at ``motion`` (0: a solution; ``None``: not solved)."""
-    lp = problem.motion_lp(motion)
-    if lp is None:
-        return None
-    n, m = lp.a_eq.shape[1], lp.a_eq.shape[0]
-    identity = sp.eye(m)
-    equalities = sp.hstack([lp.a_eq, identity, -identity])
-    bounds = -sp.eye(n + 2 * m)
-    inequalities = sp.vstack([sp.hstack([lp.a_ub, sp.csr_matrix((lp.a_ub.shape[0], 2 * m))]), bounds])
-    cost = np.concatenate([np.zeros(n), np.ones(2 * m)])
-    right = np.concatenate([b_eq, np.zeros(inequalities.shape[0])])
-    solved = _solve(cost, sp.vstack([equalities, inequalities]), right, equalities=m)
-    return None if solved is None else float(cost @ solved)
 
 
 def _solve(cost, constraints, right, equalities: int = 0):
