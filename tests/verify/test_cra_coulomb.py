@@ -43,14 +43,14 @@ def test_tresca_solution_is_an_equilibrium_with_friction_against_the_slide():
     assert np.all(np.hypot(*friction.T) <= 0.2 + 1e-7)  # |f_t| <= s_v
 
 
-def test_tresca_is_unbounded_when_the_thresholds_cannot_hold_the_load():
+def test_tresca_leans_on_eta_when_the_thresholds_cannot_hold_the_load():
     # Tilted by 30 degrees the cube needs friction tan 30 = 0.58 of its normal force; thresholds of 0.5 cannot
-    # hold it, so the load does unbounded work (up to eta) and the multipliers of eta carry the rest
+    # hold it, so it slides until the bound eta stops it (100 eps down the slope), whose multipliers carry the rest
     problem, b_eq = _problem(_stack(), 0.5, tilted_gravity("x", 30))
     normal, tangential = b_eq[2], b_eq[1]  # the load's components across and along the contact
     assert tangential / normal == pytest.approx(math.tan(math.radians(30)))
     solved = cra_coulomb.tresca(problem, b_eq, np.full(4, 0.5 * normal / 4), 0.25)
-    assert solved is None or solved.eta_active > 0
+    assert solved.eta_active > 0 and solved.motion[1] == pytest.approx(-problem.ratio)
     held = cra_coulomb.tresca(problem, b_eq, np.full(4, 0.6 * normal / 4), 0.25)  # mu = 0.6 > tan 30 holds it
     assert held is not None and held.eta_active == 0
 

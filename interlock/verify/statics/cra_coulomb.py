@@ -88,7 +88,8 @@ class TrescaSolution:
 
 def tresca(problem, b_eq, thresholds, stiffness: float) -> TrescaSolution | None:
     """Solve (T) of the module docstring for ``thresholds`` ``s_v`` and ``stiffness`` ``k``; ``None`` if
-    Clarabel does not solve it (unbounded: the thresholds cannot hold the load).
+    Clarabel does not solve it.  The bound ``eta`` keeps (T) bounded: where the thresholds cannot hold the load,
+    blocks slide until it stops them (``eta_active > 0``), and its multipliers carry the rest.
 
     Unknowns ``(q, y, t)``: ``y_v`` is the elastic part of the slide, ``t_v >= |dd_t,v - y_v|`` (a second-order
     cone per vertex), and the cost is ``b^T q + sum k |y_v|^2 / 2 + s_v t_v``.

@@ -144,8 +144,8 @@ def decide_large(problem, b_eq, binaries: int, timings: dict, time_limit: float 
                 found = (*result, f"the Coulomb fixed point ({rounds} convex frictional-contact solves)")
             else:
                 coulomb = cra_coulomb.describe(problem, b_eq, rounds, last)
-    timings["lp"] = timings.get("lp", 0.0) + time.perf_counter() - started
     if found is not None:
+        timings["lp"] = timings.get("lp", 0.0) + time.perf_counter() - started
         motion, forces, how = found
         return "stable", forces, motion, f"equilibrium realised by {how} (large model; exact check)"
     if motion is None:
@@ -158,6 +158,7 @@ def decide_large(problem, b_eq, binaries: int, timings: dict, time_limit: float 
                + {False: "cannot carry the load even with friction anywhere in the cone",
                   True: "could carry the load, but not with friction against its slides",
                   None: "were not decided to carry the load"}[carried] + ")")
+    timings["lp"] = timings.get("lp", 0.0) + time.perf_counter() - started
     return ("inconclusive", None, None,
             f"RBE has an equilibrium (necessary, not sufficient); {why}; {coulomb}; the MILP relaxation would "
             f"have {binaries} binaries, beyond the exact route (the shelf's 380 are undecided in 10 min); a local "
