@@ -423,7 +423,13 @@ def _run_stability(args) -> int:
             raise InterlockError(f"{args.interfaces} stores no interfaces; drop --interfaces to find them "
                                  "(--contacts interfaces or exact)")
     if args.method == "cra":
-        result = cra(assembly, args.mu, density=args.density, cone=args.cone, contacts=found, **cra_options)
+        with tqdm(desc="cra", unit="stage", disable=None, leave=False) as bar:
+            def stage(words):
+                bar.set_postfix_str(words)
+                bar.update(1)
+
+            result = cra(assembly, args.mu, density=args.density, cone=args.cone, contacts=found,
+                         progress=stage, **cra_options)
     else:
         result = rbe(assembly, args.mu, density=args.density, cone=args.cone, contacts=found)
     tilt = None

@@ -114,3 +114,13 @@ def test_shelf_fixed_point_names_the_blocks_it_cannot_balance(reference_data):
     assert residual > 1e-3 and blocks == (8, 9, 10)
     words = cra_coulomb.describe(problem, b_eq, rounds, last)
     assert f"ran {rounds} rounds" in words and "at 3 blocks (8, 9, 10)" in words
+
+
+def test_progress_names_each_stage_and_round(reference_data):
+    # the CLI shows these words on its progress bar: RBE, the quick answers, then one entry per round
+    assembly = load_compas(reference_data / "compas_cra" / "shelf-stable.json")
+    stages = []
+    result = cra(assembly, 0.9, contacts=contacts(assembly), time_limit=2.0, progress=stages.append)
+    rounds = int(result.message.split("Coulomb fixed point (")[1].split()[0])
+    assert stages[:2] == ["RBE", "quick answers"]
+    assert stages[2:] == [f"Coulomb fixed point, round {k}" for k in range(1, rounds + 1)]

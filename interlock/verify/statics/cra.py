@@ -200,7 +200,7 @@ def cra(assembly, mu: float, density: float = 1.0, gravity=(0.0, 0.0, -1.0), fra
         sides: int = DEFAULT_SIDES, eps: float = DEFAULT_EPS, eta: float = DEFAULT_ETA,
         sectors: int = DEFAULT_SECTORS, force_bound: float = DEFAULT_FORCE_BOUND,
         min_slide: float = DEFAULT_MIN_SLIDE, time_limit: float = DEFAULT_TIME_LIMIT, contacts=None,
-        backend: str = "milp") -> CRAResult:
+        backend: str = "milp", progress=None) -> CRAResult:
     """Coupled rigid-block analysis: is there an equilibrium that a virtual motion realises? (CRA paper, (11)).
 
     Forces ``f`` at the contact vertices and a virtual motion ``dq`` of the
@@ -241,6 +241,9 @@ def cra(assembly, mu: float, density: float = 1.0, gravity=(0.0, 0.0, -1.0), fra
         large for the MILP) asks its local solver for a motion and verifies it with the exact LP:
         "stable" if the LP accepts it, otherwise "inconclusive" (a local solver that finds nothing
         proves nothing).
+    progress : callable, optional
+        Called with a few words as each stage starts ("RBE", "the motion of most work",
+        "Coulomb fixed point, round 3", "MILP with 4 sectors", ...); the CLI shows them.
 
     Returns
     -------
@@ -272,7 +275,7 @@ def cra(assembly, mu: float, density: float = 1.0, gravity=(0.0, 0.0, -1.0), fra
         return problem.check_upstream(assembly, gravity)
     if backend != "milp":
         raise StabilityError(f"backend must be 'milp' or 'compas_cra', got {backend!r}")
-    return problem.solve(gravity, sectors, time_limit)
+    return problem.solve(gravity, sectors, time_limit, progress=progress)
 
 
 def decider(assembly, mu: float, sectors: int = DEFAULT_SECTORS, time_limit: float = DEFAULT_TIME_LIMIT,
@@ -294,6 +297,10 @@ def decider(assembly, mu: float, sectors: int = DEFAULT_SECTORS, time_limit: flo
         return result.stable
 
     return stable
+
+
+def _silent(stage: str) -> None:
+    """The default ``progress``: says nothing."""
 
 
 def _sector_count(sectors) -> int:
@@ -330,21 +337,24 @@ class CRAProblem:
 
     # --- the whole decision -----------------------------------------------------------------------------------
 
-    def solve(self, gravity: np.ndarray, sectors: int, time_limit: float, known=()) -> CRAResult:
+    def solve(self, gravity: np.ndarray, sectors: int, time_limit: float, known=(), progress=None) -> CRAResult:
+        progress = progress or _silent
         timings = {**self.system.timings, "milp": 0.0, "lp": 0.0}
         b_eq, total = self._right_hand_side(gravity)
         tried, message, status = [], "", "inconclusive"
         started = time.perf_counter()
+        progress("RBE")
         rbe_forces, status_rbe, _, _ = self.system.solve_lp(gravity, least_force=True)
         if status_rbe == 0 and rbe_forces is None:  # nothing to carry (no free block touches anything)
             rbe_forces = np.zeros(0)
         if status_rbe == 0 and len(self.system.points) > cra_large.LARGE_VERTICES and not known:
             timings["lp"] += time.perf_counter() - started
             status, forces, motion, message = cra_large.decide_large(
-                self, b_eq, len(self.system.points) * (1 + sectors), timings, time_limit)
+                self, b_eq, len(self.system.points) * (1 + sectors), timings, time_limit, progress)
             parameters = {**self.parameters, "sectors": tried, "gravity": gravity.tolist(), "route": "large"}
             return self._result(status, message, None if forces is None else forces * total, motion, parameters,
                                 timings)
+        progress("quick answers")
         work, most_work = self._most_work(b_eq) if status_rbe == 0 else (np.inf, None)
         quick = self._quick(b_eq, rbe_forces if status_rbe == 0 else None, known, most_work)
         timings["lp"] += time.perf_counter() - started
@@ -356,7 +366,7 @@ class CRAProblem:
         local = None  # (found, how) of the local solvers, once run
         binaries = len(self.system.points) * (1 + sectors)
         if binaries > LOCAL_FIRST_BINARIES:  # a MILP this large rarely decides in time: local solvers first
-            local = self._local(b_eq, rbe_forces, most_work, timings)
+            local = self._local(b_eq, rbe_forces, most_work, timings, progress)
             if local[0] is not None:
                 motion, forces = local[0]
                 message = (f"equilibrium realised by a virtual motion, found by {local[1]} (tried before the MILP, "
@@ -368,6 +378,7 @@ class CRAProblem:
         timings["milp"] += time.perf_counter() - started
         for count in (sectors,) + tuple(s for s in REFINED_SECTORS if s > sectors):
             tried.append(count)
+            progress(f"MILP with {count} sectors")
             started = time.perf_counter()
             outcome = self._milp(b_eq, force_bounds, count, time_limit)
             if outcome is None:  # an infeasibility claim is checked on a looser formulation (floating point)
@@ -396,7 +407,8 @@ class CRAProblem:
                 break
             message = f"the MILP's motions could not be made exact with up to {count} sectors"
         if status == "inconclusive":  # last resort: local solves of (11), checked by the exact LP
-            found, how = local if local is not None else self._local(b_eq, rbe_forces, most_work, timings)
+            found, how = local if local is not None else self._local(b_eq, rbe_forces, most_work, timings,
+                                                                     progress)
             if found is not None:
                 status, (motion, forces) = "stable", found
                 message = (f"equilibrium realised by a virtual motion, found by {how} (the MILP did not decide: "
@@ -407,10 +419,10 @@ class CRAProblem:
         return self._result(status, message, forces * total if status == "stable" else None,
                             motion if status == "stable" else None, parameters, timings)
 
-    def _local(self, b_eq, rbe_forces, most_work, timings):
+    def _local(self, b_eq, rbe_forces, most_work, timings, progress):
         """:func:`~interlock.verify.statics.cra_local.last_resort`, timed (``lp``: SLSQP and the checks; ``ipopt``)."""
         started = time.perf_counter()
-        found = cra_local.last_resort(self, b_eq, rbe_forces.reshape(-1, 3), most_work, timings)
+        found = cra_local.last_resort(self, b_eq, rbe_forces.reshape(-1, 3), most_work, timings, progress)
         timings["lp"] += time.perf_counter() - started - timings.get("ipopt", 0.0)
         return found
 

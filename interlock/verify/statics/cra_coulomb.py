@@ -147,7 +147,7 @@ def tresca(problem, b_eq, thresholds, stiffness: float) -> TrescaSolution | None
 
 
 def coulomb_fixed_point(problem, b_eq, normal_forces, check, iterations: int = COULOMB_ITERATIONS,
-                        damping: float = COULOMB_DAMPING, time_limit: float = np.inf):
+                        damping: float = COULOMB_DAMPING, time_limit: float = np.inf, progress=None):
     """Iterate (T) towards Coulomb's law (module docstring) and return ``(found, rounds, last)``.
 
     Parameters
@@ -164,6 +164,8 @@ def coulomb_fixed_point(problem, b_eq, normal_forces, check, iterations: int = C
         :data:`COULOMB_DAMPING`).
     time_limit : float
         Seconds after which no new round starts.
+    progress : callable, optional
+        Called with ``"Coulomb fixed point, round k"`` as each round starts.
 
     Returns
     -------
@@ -185,6 +187,8 @@ def coulomb_fixed_point(problem, b_eq, normal_forces, check, iterations: int = C
     last, rounds = None, 0
     while rounds < iterations and time.perf_counter() - started < time_limit:
         rounds += 1
+        if progress is not None:
+            progress(f"Coulomb fixed point, round {rounds}")
         solved = tresca(problem, b_eq, thresholds, stiffness)
         if solved is None:
             break

@@ -109,11 +109,14 @@ def carries(problem, b_eq, closed: np.ndarray) -> bool | None:
     return True if status == "Solved" else False if status == "PrimalInfeasible" else None
 
 
-def decide_large(problem, b_eq, binaries: int, timings: dict, time_limit: float = np.inf):
+def decide_large(problem, b_eq, binaries: int, timings: dict, time_limit: float = np.inf, progress=None):
     """``(status, forces, motion, message)`` for a large model (see the module docstring); forces in units of
     the free blocks' weight, the motion in units of ``eps``.  ``binaries``: the MILP's size, for the message;
-    ``time_limit``: seconds after which the Coulomb fixed point starts no new round."""
+    ``time_limit``: seconds after which the Coulomb fixed point starts no new round; ``progress(words)``, if
+    given, is told as each stage starts."""
     started = time.perf_counter()
+    if progress is not None:
+        progress("the motion of most work")
     motion, _ = most_work(problem, b_eq)
     found = None
     active, closed = 0, None
@@ -139,7 +142,7 @@ def decide_large(problem, b_eq, binaries: int, timings: dict, time_limit: float 
             spent = time.perf_counter() - started
             result, rounds, last = cra_coulomb.coulomb_fixed_point(
                 problem, b_eq, frugal[:, 0], lambda m: exact(problem, b_eq, m),
-                iterations=LARGE_COULOMB_ROUNDS, time_limit=time_limit - spent)
+                iterations=LARGE_COULOMB_ROUNDS, time_limit=time_limit - spent, progress=progress)
             if result is not None:
                 found = (*result, f"the Coulomb fixed point ({rounds} convex frictional-contact solves)")
             else:

@@ -50,26 +50,30 @@ POLISH_ITERATIONS = 50
 LEAST_FRICTION_NORMAL = 1e-3
 
 
-def last_resort(problem, b_eq, rbe_forces, most_work, timings):
+def last_resort(problem, b_eq, rbe_forces, most_work, timings, progress=None):
     """``((motion, forces), how)`` of a local solve of (11) that the exact LP accepts, or ``(None, why not)``.
 
     In turn: the Coulomb fixed point (:func:`~interlock.verify.statics.cra_coulomb.coulomb_fixed_point`) from
     the least-friction equilibrium; if CasADi is installed, IPOPT on the whole problem (11) as in the paper
     (:mod:`interlock.verify.statics.cra_ipopt`) from the motion of most work with the least-friction forces, from
     rest, and from where the assembly settles (:func:`settled_motion`); then SLSQP from where it settles
-    with those vertices kept closed (up to :data:`LAST_RESORT_LIMIT` of them).
+    with those vertices kept closed (up to :data:`LAST_RESORT_LIMIT` of them).  ``progress(words)``, if
+    given, is told as each solver starts.
     """
     frugal = least_friction(problem, b_eq)
     coulomb = "the Coulomb fixed point did not start (no least-friction equilibrium)"
     if frugal is not None:
         found, rounds, last = cra_coulomb.coulomb_fixed_point(problem, b_eq, frugal[:, 0],
-                                                              lambda motion: problem.exact(b_eq, motion))
+                                                              lambda motion: problem.exact(b_eq, motion),
+                                                              progress=progress)
         if found is not None:
             return found, f"the Coulomb fixed point ({rounds} convex frictional-contact solves)"
         coulomb = cra_coulomb.describe(problem, b_eq, rounds, last)
     settled = settled_motion(problem, b_eq)
     statuses = []
     if cra_ipopt.available():
+        if progress is not None:
+            progress("IPOPT on (11)")
         starts = [(most_work, frugal), (None, None), (settled, frugal)]
         started = time.perf_counter()
         try:
