@@ -16,7 +16,7 @@ import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
-__all__ = ["atomic_write", "write_atomically", "replace_folder", "json_float", "PARTIAL"]
+__all__ = ["atomic_write", "write_atomically", "replace_folder", "unwritable", "json_float", "PARTIAL"]
 
 #: The marker in the names of temporary files and folders (``.NAME.<random>.partial.SUFFIX``); a killed write
 #: leaves such a file beside its target, never a damaged target.
@@ -146,6 +146,36 @@ def _umask() -> int:
     mask = os.umask(0o022)
     os.umask(mask)
     return mask
+
+
+def unwritable(path, folder_output: bool = False, hint: str = "") -> str | None:
+    """Why a file cannot be written at ``path``, in words, or ``None`` if nothing stands in the way.
+
+    Checked before any work is done, so that an export or a sweep fails at once with a message the caller
+    prefixes by ``cannot write {path}: ``: the folder is missing, is a file or is not writable; ``path`` is a
+    folder (unless ``folder_output``, for outputs that are folders; ``hint`` says what to give instead); or
+    the file system refuses the name (e.g. too long).
+
+    >>> import tempfile
+    >>> folder = Path(tempfile.mkdtemp())
+    >>> unwritable(folder / "a.stl") is None, unwritable(folder / "missing" / "a.stl").endswith("create it first")
+    (True, True)
+    >>> unwritable(folder, hint="ending in .stl")
+    'it is a folder; give a file name ending in .stl'
+    """
+    path = Path(path)
+    folder = path.parent
+    try:
+        if not folder.is_dir():
+            return f"the folder {folder} " + ("is a file, not a folder" if folder.exists()
+                                              else "does not exist; create it first")
+        if not os.access(folder, os.W_OK):
+            return f"the folder {folder} is not writable"
+        if path.is_dir() and not folder_output:
+            return "it is a folder; give a file name" + (f" {hint}" if hint else "")
+    except OSError as error:  # a name too long for the file system, a broken mount, ...
+        return error.strerror or str(error)
+    return None
 
 
 def json_float(value: float) -> float | str:

@@ -3,6 +3,7 @@
 import hashlib
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -11,7 +12,7 @@ import time
 import pytest
 
 from interlock.blocks import Assembly, random_hexagon, rhomblock_assembly
-from interlock.files import PARTIAL, atomic_write, replace_folder, write_atomically
+from interlock.files import PARTIAL, atomic_write, replace_folder, unwritable, write_atomically
 from interlock.gallery import build, export
 
 # --- the helpers ------------------------------------------------------------------------------------------------
@@ -152,3 +153,29 @@ def test_a_gallery_does_not_replace_a_folder_of_other_files(tmp_path):
     with pytest.raises(GalleryError, match="holds other files .* no manifest.json"):
         build(tmp_path, quick=True, names=["escher-p4"])
     assert (tmp_path / "thesis.tex").read_text() == "mine"
+
+
+@pytest.mark.parametrize("name,reason", [
+    ("missing/a.json", r"the folder .*missing does not exist; create it first"),
+    ("plain.txt/a.json", r"the folder .*plain.txt is a file, not a folder"),
+    ("sub", r"it is a folder; give a file name ending in \.json"),
+    ("x" * 300 + ".json", r"too long"),
+])
+def test_unwritable_says_why_before_any_work(tmp_path, name, reason):
+    (tmp_path / "plain.txt").write_text("x")
+    (tmp_path / "sub").mkdir()
+    assert re.fullmatch(reason, unwritable(tmp_path / name, hint="ending in .json"), flags=re.IGNORECASE)
+    assert unwritable(tmp_path / "a.json") is None
+    assert unwritable(tmp_path / "sub", folder_output=True) is None  # outputs that are folders (Parquet sweeps)
+
+
+@pytest.mark.parametrize("suffix", [".json", ".3dm"])
+def test_assembly_files_refuse_a_missing_folder_with_the_shared_reason(tmp_path, suffix):
+    # COMPAS JSON and Rhino writers give the reason the exporters give, as their own error (an InterlockError)
+    if suffix == ".3dm":
+        pytest.importorskip("rhino3dm")
+    from interlock.blocks import presets
+    from interlock.errors import InterlockError
+
+    with pytest.raises(InterlockError, match="does not exist; create it first"):
+        export(presets.block_on_pins(), tmp_path / "missing" / f"a{suffix}")

@@ -12,7 +12,7 @@ import trimesh
 from interlock import deprecation
 from interlock.blocks.info import plain, restored
 from interlock.errors import AssemblyError
-from interlock.files import write_atomically
+from interlock.files import unwritable, write_atomically
 
 __all__ = ["read_compas", "write_compas", "UPSTREAM_SUPPORTS", "COMPAS_DTYPES", "BLOCK_DTYPE", "GRAPH_DTYPE",
            "INFO_ATTRIBUTE"]
@@ -195,8 +195,9 @@ def _outline(triangles: np.ndarray) -> list[int] | None:
 
 
 def _write_atomically(text: str, path: Path):
-    if not path.parent.is_dir():
-        raise AssemblyError(f"cannot write {path}: the folder {path.parent} does not exist")
+    problem = unwritable(path, hint="ending in .json")
+    if problem:
+        raise AssemblyError(f"cannot write {path}: {problem}")
     try:
         write_atomically(path, text)
     except OSError as error:

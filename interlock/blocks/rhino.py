@@ -14,7 +14,7 @@ from interlock.blocks.info import plain, restored
 from interlock.blocks.lozenge import Lozenge
 from interlock.blocks.repair import merge_vertices, split_t_junctions, triangulate_polygons, unmatched_edges
 from interlock.errors import AssemblyError
-from interlock.files import atomic_write
+from interlock.files import atomic_write, unwritable
 from interlock.wallpaper.elements import GroupElement, parse_symop
 
 __all__ = ["write_3dm", "read_3dm_blocks", "RhinoError", "FRAME_LAYER", "MARKER_KEY", "INFO_KEY", "MISSING_MESSAGE",
@@ -226,9 +226,9 @@ def _label_text(label) -> tuple[str, str]:
 
 
 def _write_atomically(document, path: Path, version: int):
-    folder = path.parent if str(path.parent) else Path(".")
-    if not folder.is_dir():
-        raise RhinoError(f"cannot write {path}: the folder {folder} does not exist")
+    problem = unwritable(path, hint="ending in .3dm")
+    if problem:
+        raise RhinoError(f"cannot write {path}: {problem}")
     try:
         with atomic_write(path) as temporary:
             if not document.Write(str(temporary), int(version)):

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import io
 import math
-import os
 import zipfile
 from numbers import Real
 from pathlib import Path
@@ -21,7 +20,7 @@ from interlock.blocks.rhino import write_3dm
 from interlock.blocks.meshfiles import (BLOCK_DATA, FIXED_DATA, FIXED_WORD, OBJ_SECOND_LINE, STL_FIXED_BIT,
                                        STL_MAX_FRAMED, STL_RECORD, file_header)
 from interlock.errors import GalleryError
-from interlock.files import atomic_write, write_atomically
+from interlock.files import atomic_write, unwritable, write_atomically
 from interlock.gallery import appearance
 
 __all__ = ["export", "FORMATS"]
@@ -146,19 +145,9 @@ def _target(path) -> Path:
     if suffix not in FORMATS:
         raise GalleryError(f"cannot export to {path.name!r}: unknown format {suffix or '(no suffix)'}; "
                            f"use one of {supported}")
-    folder = path.parent
-    try:
-        problem = (None if folder.is_dir() else "is a file, not a folder" if folder.exists()
-                   else "does not exist; create it first")
-        if problem is None and not os.access(folder, os.W_OK):
-            problem = "is not writable"
-        target_is_folder = path.is_dir()
-    except OSError as error:  # a name too long for the file system, a broken mount, ...
-        raise GalleryError(f"cannot write {path}: {error.strerror or error}") from None
+    problem = unwritable(path, hint=f"ending in one of {supported}")
     if problem:
-        raise GalleryError(f"cannot write {path}: the folder {folder} {problem}")
-    if target_is_folder:
-        raise GalleryError(f"cannot write {path}: it is a folder; give a file name ending in one of {supported}")
+        raise GalleryError(f"cannot write {path}: {problem}")
     return path
 
 

@@ -18,7 +18,7 @@ from pathlib import Path
 
 import interlock
 from interlock.blocks.limits import memory_text
-from interlock.files import atomic_write, write_atomically
+from interlock.files import atomic_write, unwritable, write_atomically
 from interlock.sweep.record import evaluate_chunk
 from interlock.sweep.spec import SweepError, SweepSpec, load_spec
 
@@ -155,14 +155,9 @@ def _writer(path: Path, resume: bool):
     """The output's writer, after checking that it can be written: before any point is computed."""
     if path.suffix not in FORMATS:
         raise SweepError(f"the output must end in {' or '.join(FORMATS)}, got {path.name}")
-    folder = path.parent
-    if not folder.is_dir():
-        raise SweepError(f"cannot write {path}: the folder {folder} "
-                         f"{'is a file' if folder.exists() else 'does not exist; create it first'}")
-    if not os.access(folder, os.W_OK):
-        raise SweepError(f"cannot write {path}: the folder {folder} is not writable")
-    if path.suffix == ".jsonl" and path.is_dir():
-        raise SweepError(f"cannot write {path}: it is a folder; give a file name ending in .jsonl")
+    problem = unwritable(path, folder_output=path.suffix == ".parquet", hint="ending in .jsonl")
+    if problem:
+        raise SweepError(f"cannot write {path}: {problem}")
     if path.suffix == ".parquet" and path.exists() and not path.is_dir():
         raise SweepError(f"cannot write {path}: a Parquet output is a folder, and this is a file")
     if path.exists() and not resume:
