@@ -154,7 +154,8 @@ def unwritable(path, folder_output: bool = False, hint: str = "") -> str | None:
     Checked before any work is done, so that an export or a sweep fails at once with a message the caller
     prefixes by ``cannot write {path}: ``: the folder is missing, is a file or is not writable; ``path`` is a
     folder (unless ``folder_output``, for outputs that are folders; ``hint`` says what to give instead); or
-    the file system refuses the name (e.g. too long).
+    the file system refuses to look (a broken mount).  A name the file system refuses only when writing (too
+    long) surfaces as the ``OSError`` of the write, which callers turn into their error.
 
     >>> import tempfile
     >>> folder = Path(tempfile.mkdtemp())
