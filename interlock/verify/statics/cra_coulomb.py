@@ -51,7 +51,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
-from interlock.verify.statics.equilibrium import clarabel_lp
+from interlock.verify.statics.equilibrium import clarabel_lp, clarabel_solve
 
 __all__ = ["COULOMB_ITERATIONS", "COULOMB_DAMPING", "TrescaSolution", "tresca", "coulomb_fixed_point",
            "unbalanced", "describe"]
@@ -130,11 +130,8 @@ def tresca(problem, b_eq, thresholds, stiffness: float) -> TrescaSolution | None
     quadratic = sp.block_diag([sp.csc_matrix((n_q, n_q)), stiffness * sp.eye(2 * s), sp.csc_matrix((s, s))],
                               format="csc")
     cost = np.concatenate([b_eq, np.zeros(2 * s), thresholds])
-    settings = clarabel.DefaultSettings()
-    settings.verbose = False
-    solution = clarabel.DefaultSolver(quadratic, cost, constraints, right,
-                                      [clarabel.NonnegativeConeT(7 * s)] + [clarabel.SecondOrderConeT(3)] * s,
-                                      settings).solve()
+    solution = clarabel_solve(quadratic, cost, constraints, right,
+                              [clarabel.NonnegativeConeT(7 * s)] + [clarabel.SecondOrderConeT(3)] * s)
     status = str(solution.status)
     if status not in ("Solved", "AlmostSolved"):
         return None

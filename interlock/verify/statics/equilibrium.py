@@ -26,7 +26,7 @@ from interlock.verify.statics.interfaces import statics_contacts
 __all__ = ["StabilityError", "StabilityResult", "EquilibriumSystem", "equilibrium_matrix", "friction_block",
            "friction_matrix", "friction_utilisation", "gravity_vector", "nonnegative", "positive",
            "block_densities", "json_float", "CONES", "DEFAULT_SIDES", "LARGE_LP", "DEFAULT_EPS", "DEFAULT_ETA",
-           "FRICTION_RTOL", "contact_words", "clarabel_lp"]
+           "FRICTION_RTOL", "contact_words", "clarabel_lp", "clarabel_solve"]
 
 #: Linearised friction cones: "paper" circumscribes the Coulomb cone (App. B, faces tangent to it, so it
 #: allows up to 1/cos(pi/sides) more friction between its faces), "inner" is inscribed (conservative).
@@ -271,13 +271,24 @@ def clarabel_lp(cost, constraints, right, equalities: int = 0):
     """
     import clarabel
 
+    cones = ([clarabel.ZeroConeT(equalities)] if equalities else []) + \
+        [clarabel.NonnegativeConeT(constraints.shape[0] - equalities)]
+    return clarabel_solve(None, cost, constraints, right, cones)
+
+
+def clarabel_solve(quadratic, cost, constraints, right, cones):
+    """Clarabel on ``min x.Q x / 2 + cost . x`` subject to ``right - constraints x`` in ``cones`` (Clarabel's
+    cone objects), quietly and on :data:`~interlock.verify.check.SOLVER_THREADS` threads; ``quadratic`` ``Q``
+    may be ``None`` (an LP).  The one place the statics set Clarabel up (:func:`clarabel_lp`, and the cone
+    program of :func:`~interlock.verify.statics.cra_coulomb.tresca`)."""
+    import clarabel
+
     n = constraints.shape[1]
     settings = clarabel.DefaultSettings()
     settings.verbose = False
     settings.max_threads = SOLVER_THREADS
-    cones = ([clarabel.ZeroConeT(equalities)] if equalities else []) + \
-        [clarabel.NonnegativeConeT(constraints.shape[0] - equalities)]
-    return clarabel.DefaultSolver(sp.csc_matrix((n, n)), np.asarray(cost, dtype=float), sp.csc_matrix(constraints),
+    quadratic = sp.csc_matrix((n, n)) if quadratic is None else sp.csc_matrix(quadratic)
+    return clarabel.DefaultSolver(quadratic, np.asarray(cost, dtype=float), sp.csc_matrix(constraints),
                                   np.asarray(right, dtype=float), cones, settings).solve()
 
 
