@@ -716,7 +716,7 @@ class CRAProblem:
         if outcome.status != 0:
             return None
         x = np.maximum(outcome.x, 0.0)
-        return lp.forces(x) if cra_large.holds(lp, x, b_eq) else cra_large.exact(self, b_eq, motion)
+        return lp.forces(x) if cra_large.holds(lp, x, b_eq) else cra_large.interior_forces(lp, b_eq)
 
     # --- the result -------------------------------------------------------------------------------------------
 

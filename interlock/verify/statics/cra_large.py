@@ -33,10 +33,11 @@ import time
 import numpy as np
 import scipy.sparse as sp
 
-from interlock.verify.statics import cra_coulomb, cra_local
+from interlock.verify.statics import cra_local
 from interlock.verify.statics.equilibrium import clarabel_lp
 
-__all__ = ["LARGE_VERTICES", "CHECK_RTOL", "most_work", "exact", "holds", "carries", "decide_large"]
+__all__ = ["LARGE_VERTICES", "CHECK_RTOL", "most_work", "exact", "interior_forces", "holds", "carries",
+           "decide_large"]
 
 #: Contact vertices above which :func:`~interlock.verify.statics.cra.cra` takes this route (the shelves of
 #: Fig. 7 and 12 have 60-90, the 36-voussoir arch 148, the armadillo vault 10,901).
@@ -71,8 +72,12 @@ def exact(problem, b_eq, motion):
     """Forces solving (11) exactly at ``motion`` (least ``sum f_n``), or ``None``: the LP of
     ``CRAProblem.motion_lp`` solved by Clarabel, then every residual checked (:data:`CHECK_RTOL`)."""
     lp = problem.motion_lp(motion)
-    if lp is None:
-        return None
+    return None if lp is None else interior_forces(lp, b_eq)
+
+
+def interior_forces(lp, b_eq):
+    """Forces of the LP of (11) at a motion (``lp``: a ``MotionLP``) by Clarabel, if they pass :func:`holds`;
+    else ``None``."""
     n = len(lp.cost)
     constraints = sp.vstack([lp.a_eq, lp.a_ub, -sp.eye(n)], format="csc")
     right = np.concatenate([b_eq, np.zeros(lp.a_ub.shape[0] + n)])
@@ -135,18 +140,14 @@ def decide_large(problem, b_eq, binaries: int, timings: dict, time_limit: float 
             if forces is not None:
                 found = (candidate, forces, "the motion of most work")
                 break
-    coulomb = "the Coulomb fixed point did not start (no least-friction equilibrium)"
+    coulomb = ""
     if found is None:
         frugal = cra_local.least_friction(problem, b_eq, interior=True)
-        if frugal is not None:
-            spent = time.perf_counter() - started
-            result, rounds, last = cra_coulomb.coulomb_fixed_point(
-                problem, b_eq, frugal[:, 0], lambda m: exact(problem, b_eq, m),
-                iterations=LARGE_COULOMB_ROUNDS, time_limit=time_limit - spent, progress=progress)
-            if result is not None:
-                found = (*result, f"the Coulomb fixed point ({rounds} convex frictional-contact solves)")
-            else:
-                coulomb = cra_coulomb.describe(problem, b_eq, rounds, last)
+        result, coulomb = cra_local.coulomb_route(problem, b_eq, frugal, lambda m: exact(problem, b_eq, m),
+                                                  progress, iterations=LARGE_COULOMB_ROUNDS,
+                                                  time_limit=time_limit - (time.perf_counter() - started))
+        if result is not None:
+            found = (*result, coulomb)
     if found is not None:
         timings["lp"] = timings.get("lp", 0.0) + time.perf_counter() - started
         motion, forces, how = found

@@ -31,7 +31,7 @@ from interlock.verify.statics import cra_coulomb, cra_ipopt
 from interlock.verify.statics.equilibrium import clarabel_lp
 
 __all__ = ["least_friction", "realise", "realise_least_friction", "settled_motion", "snap", "polish",
-           "verify_local", "last_resort"]
+           "verify_local", "last_resort", "coulomb_route"]
 
 #: A vertex is closed when ``dd_n + eps <= ACTIVE_TOL * eps``.
 ACTIVE_TOL = 1e-7
@@ -61,14 +61,10 @@ def last_resort(problem, b_eq, rbe_forces, most_work, timings, progress=None):
     given, is told as each solver starts.
     """
     frugal = least_friction(problem, b_eq)
-    coulomb = "the Coulomb fixed point did not start (no least-friction equilibrium)"
-    if frugal is not None:
-        found, rounds, last = cra_coulomb.coulomb_fixed_point(problem, b_eq, frugal[:, 0],
-                                                              lambda motion: problem.exact(b_eq, motion),
-                                                              progress=progress)
-        if found is not None:
-            return found, f"the Coulomb fixed point ({rounds} convex frictional-contact solves)"
-        coulomb = cra_coulomb.describe(problem, b_eq, rounds, last)
+    found, coulomb = coulomb_route(problem, b_eq, frugal, lambda motion: problem.exact(b_eq, motion),
+                                   progress=progress)
+    if found is not None:
+        return found, coulomb
     settled = settled_motion(problem, b_eq)
     statuses = []
     if cra_ipopt.available():
@@ -94,6 +90,20 @@ def last_resort(problem, b_eq, rbe_forces, most_work, timings, progress=None):
                       f"solver)")
     return None, (f"no local solve found one ({coulomb}; SLSQP, and IPOPT, the paper's solver, from {len(statuses)} "
                   f"starts: {', '.join(statuses)}; which proves nothing)")
+
+
+def coulomb_route(problem, b_eq, frugal, check, progress=None, **options):
+    """``((motion, forces), how)`` of the Coulomb fixed point started from the least-friction equilibrium
+    ``frugal`` (:func:`least_friction`; ``None`` if there is none), each motion judged by ``check``, or
+    ``(None, why not)`` naming what its last motion leaves unbalanced.  ``options``: ``iterations``,
+    ``time_limit`` of :func:`~interlock.verify.statics.cra_coulomb.coulomb_fixed_point`."""
+    if frugal is None:
+        return None, "the Coulomb fixed point did not start (no least-friction equilibrium)"
+    found, rounds, last = cra_coulomb.coulomb_fixed_point(problem, b_eq, frugal[:, 0], check, progress=progress,
+                                                          **options)
+    if found is not None:
+        return found, f"the Coulomb fixed point ({rounds} convex frictional-contact solves)"
+    return None, cra_coulomb.describe(problem, b_eq, rounds, last)
 
 
 def verify_local(problem, b_eq, motion, forces):
