@@ -16,6 +16,7 @@ import scipy.optimize
 import scipy.sparse as sp
 
 from interlock.blocks import Assembly
+from interlock.files import atomic_write, write_atomically
 
 RESULTS = Path(__file__).resolve().parent / "results"
 #: The reference data of other projects (TopoLite, compas_cra), kept with the tests.
@@ -88,8 +89,10 @@ def _blas_threads() -> int | None:
 
 
 def write_json(name: str, payload: dict) -> Path:
-    path = results_folder() / f"{name}.json"
-    path.write_text(json.dumps({"machine": machine(), **payload}, indent=2))
+    """Write ``benchmarks/results/<name>.json`` (with this machine's description) atomically: an interrupted run
+    leaves the last record whole (``run_armadillo`` and ``run_exported`` of the stability benchmark read it back)."""
+    path = write_atomically(results_folder() / f"{name}.json", json.dumps({"machine": machine(), **payload},
+                                                                           indent=2))
     print(f"wrote {path}")
     return path
 
@@ -107,11 +110,14 @@ def pyplot():
     return plt
 
 
-def save_chart(fig, name: str) -> Path:
-    """Write ``benchmarks/results/<name>.png`` and close the figure."""
+def save_chart(fig, name: str, tight: bool = True) -> Path:
+    """Write ``benchmarks/results/<name>.png`` atomically and clear the figure; ``tight=False`` keeps a layout
+    the caller has set (``subplots_adjust``)."""
     path = results_folder() / f"{name}.png"
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    if tight:
+        fig.tight_layout()
+    with atomic_write(path) as temporary:
+        fig.savefig(temporary, dpi=120)
     fig.clf()
     return path
 

@@ -53,7 +53,8 @@ from dataclasses import dataclass, field
 import numpy as np
 import trimesh
 
-from benchmarks.common import BLAS_THREADS, REFERENCE_DATA, limited_blas, main, pyplot, results_folder, write_json
+from benchmarks.common import (BLAS_THREADS, REFERENCE_DATA, limited_blas, main, pyplot, results_folder, save_chart,
+                               write_json)
 from interlock.blocks import load_compas
 from interlock.blocks.compas import UPSTREAM_SUPPORTS
 from interlock.verify import check, contacts
@@ -830,7 +831,7 @@ def _chart(payload) -> None:
                  f"Reference: 3DEC / the paper. {agree}", fontsize=9, x=0.01, ha="left")
     fig.subplots_adjust(left=0.12, right=0.99, bottom=0.07 + 1.2 / grid_height, top=1 - 0.5 / grid_height,
                         wspace=0.08)
-    figure.savefig(results_folder() / "stability.png", dpi=120)
+    save_chart(figure, "stability", tight=False)
     plt.close(figure)
 
 

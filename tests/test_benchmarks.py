@@ -33,6 +33,36 @@ def test_every_benchmark_writes_json_with_the_machine_and_a_chart(results):
     assert json.loads((ROOT / "benchmarks" / "results" / "accuracy.json").read_text())["quick"] is False
 
 
+def test_a_chart_that_fails_while_it_is_written_leaves_the_last_one_whole(tmp_path, monkeypatch):
+    # a benchmark killed or failing while it writes must not damage the recorded result it replaces
+    common = pytest.importorskip("benchmarks.common")
+    plt = common.pyplot()
+    if plt is None:
+        pytest.skip("matplotlib (the 'plot' extra) is not installed")
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    monkeypatch.setenv(common.RESULTS_VARIABLE, str(tmp_path))
+    figure = plt.figure()
+    figure.gca().plot([0, 1], [0, 1])
+    recorded = common.save_chart(figure, "chart").read_bytes()
+
+    drawn = FigureCanvasAgg.print_png
+
+    def half_written(self, target, **options):
+        if hasattr(target, "write"):  # matplotlib drawing into memory (layout), not the file
+            return drawn(self, target, metadata=options.get("metadata"), pil_kwargs=options.get("pil_kwargs"))
+        with open(target, "wb") as stream:
+            stream.write(recorded[:100])
+        raise OSError("disk full")
+
+    monkeypatch.setattr(FigureCanvasAgg, "print_png", half_written)
+    figure.gca().plot([0, 1], [1, 0])
+    with pytest.raises(OSError, match="disk full"):
+        common.save_chart(figure, "chart")
+    assert (tmp_path / "chart.png").read_bytes() == recorded and recorded[:4] == b"\x89PNG"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["chart.png"]
+
+
 def test_order_2_settles_every_case_of_its_benchmark(results):
     rows = {row["case"]: row for row in results[0]["beyond"]["rows"]}
     assert all(row["first_order"] == "not infinitesimally interlocked" for row in rows.values())
