@@ -57,19 +57,18 @@ Only the ratio ``eta / eps`` matters (the constraints are homogeneous in
 
 from __future__ import annotations
 
-import math
 import time
 from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
 import scipy.sparse as sp
-import shapely
-from scipy.optimize import Bounds, LinearConstraint, linprog, milp
+from scipy.optimize import linprog
 
-from interlock.verify.statics import cra_large, cra_local
+from interlock.verify.statics import cra_large, cra_local, cra_milp
 from interlock.verify.statics.cra_compas import upstream_solution
 from interlock.verify.statics.cra_local import ACTIVE_TOL, SLIDE_TOL
+from interlock.verify.statics.cra_milp import BOUND_MARGIN
 from interlock.verify.statics.equilibrium import (DEFAULT_EPS, DEFAULT_ETA, DEFAULT_SIDES, EquilibriumSystem,
                                                   StabilityError, contact_words, gravity_vector, json_float, positive)
 
@@ -84,13 +83,6 @@ REFINED_SECTORS = (8, 16)
 DEFAULT_FORCE_BOUND = 1e3
 #: Smallest virtual slide (along the sector bisector) of a vertex carrying friction, as a fraction of ``eps``.
 DEFAULT_MIN_SLIDE = 1e-3
-#: Slack added to every bound the MILP derives by an LP (big Ms, the virtual-work bound and row), relative and
-#: absolute (forces in units of the weight, motions of eps): a solution of (11) often attains them exactly (a
-#: block pushed into a groove closes every vertex and does exactly the most work), and HiGHS' tolerances would
-#: then call the MILP infeasible.
-BOUND_MARGIN = 1e-3
-#: Factor on the big Ms of the second, looser MILP that confirms an infeasibility (see ``CRAProblem.milp``).
-LOOSE = 10.0
 #: Seconds HiGHS may spend on one MILP before the answer is "inconclusive".
 DEFAULT_TIME_LIMIT = 60.0
 #: Above this many binaries (vertices times ``1 + sectors``) the local solvers run before the MILP, which
@@ -374,15 +366,15 @@ class CRAProblem:
                 parameters = {**self.parameters, "sectors": tried, "gravity": gravity.tolist()}
                 return self._result("stable", message, forces * total, motion, parameters, timings)
         started = time.perf_counter()
-        force_bounds = self._force_bounds(b_eq, work)  # the big Ms of every MILP below
+        force_bounds = cra_milp.force_bounds(self, b_eq, work)  # the big Ms of every MILP below
         timings["milp"] += time.perf_counter() - started
         for count in (sectors,) + tuple(s for s in REFINED_SECTORS if s > sectors):
             tried.append(count)
             progress(f"MILP with {count} sectors")
             started = time.perf_counter()
-            outcome = self._milp(b_eq, force_bounds, count, time_limit)
+            outcome = cra_milp.relaxation(self, b_eq, force_bounds, count, time_limit)
             if outcome is None:  # an infeasibility claim is checked on a looser formulation (floating point)
-                outcome = self._milp(b_eq, force_bounds, count, time_limit, tightened=False)
+                outcome = cra_milp.relaxation(self, b_eq, force_bounds, count, time_limit, tightened=False)
             timings["milp"] += time.perf_counter() - started
             if outcome is None:
                 status, message = "unstable", (f"no motion realises an equilibrium (MILP with {count} sectors "
@@ -488,7 +480,7 @@ class CRAProblem:
         return self._result("stable", "equilibrium realised by compas_cra's motion (verified exactly)",
                             exact * total, motion, parameters, timings)
 
-    # --- MILP relaxation --------------------------------------------------------------------------------------
+    # --- motions and the MILP's bounds -------------------------------------------------------------------------
 
     @cached_property
     def allowed_motions(self) -> tuple[sp.csr_matrix, np.ndarray]:
@@ -499,45 +491,14 @@ class CRAProblem:
                 np.concatenate([np.full(3 * s, self.ratio), np.tile([1.0, self.ratio, self.ratio], s)]))
 
     @cached_property
-    def _reach(self) -> np.ndarray:
-        """Per vertex ``(max dd_n + eps, max |dd_t|)`` over the allowed motions (the MILP's big Ms), eps = 1.
-
-        ``dd_n`` by an LP per vertex (the geometry often keeps it far below ``eta``, e.g. between two walls);
-        ``|dd_t| <= sqrt(2) eta`` from the bound on each component, which LPs do not improve in practice.
-        """
-        d = self.kinematic
-        s = d.shape[0] // 3
-        a_ub, b_ub = self.allowed_motions
-        normal = np.full(s, self.ratio)
-        for v in range(s):
-            outcome = linprog(-d[3 * v].toarray().ravel(), A_ub=a_ub, b_ub=b_ub, bounds=(None, None), method="highs")
-            if outcome.status == 0:
-                normal[v] = -outcome.fun
-        normal = normal * (1 + BOUND_MARGIN) + BOUND_MARGIN + 1.0
-        return np.column_stack([normal, np.full(s, math.hypot(self.ratio, self.ratio) * (1 + BOUND_MARGIN))])
+    def reach(self) -> np.ndarray:
+        """:func:`~interlock.verify.statics.cra_milp.vertex_reach`, once per problem (a tilt scan solves many loads)."""
+        return cra_milp.vertex_reach(self)
 
     @cached_property
-    def _diagonals(self) -> np.ndarray:
-        """Rows ``(a, c, b)`` of vertex indices with ``z_a + z_c - z_b <= 1``: the MILP's face cuts.
-
-        ``dd_n`` is affine over a contact polygon and ``>= -eps`` at its
-        vertices, so the vertices where it equals ``-eps`` span a face of the
-        polygon (a vertex, an edge or all of it) when the polygon is convex.
-        Two closed vertices whose diagonal crosses the interior close them all.
-        """
-        triples, start = [], 0
-        for contact in self.system.contacts:
-            count, polygon = len(contact.vertices), contact.polygon
-            convex = not polygon.interiors and abs(polygon.convex_hull.area - polygon.area) <= 1e-9 * polygon.area
-            if convex and count >= 4:
-                ring = (contact.vertices - contact.origin) @ contact.basis.T
-                inner = polygon.buffer(-1e-6 * math.sqrt(polygon.area))
-                for a in range(count):
-                    for c in range(a + 2, count - (a == 0)):
-                        if inner.contains(shapely.Point((ring[a] + ring[c]) / 2)):
-                            triples += [(start + a, start + c, start + b) for b in range(count) if b not in (a, c)]
-            start += count
-        return np.array(triples, dtype=int).reshape(-1, 3)
+    def face_cuts(self) -> np.ndarray:
+        """:func:`~interlock.verify.statics.cra_milp.face_cuts`, once per problem."""
+        return cra_milp.face_cuts(self)
 
     def _most_work(self, b_eq):
         """``(bound, motion)``: the most work ``-b.q`` the load can do on an allowed motion (``dd_n >= -eps``,
@@ -553,123 +514,6 @@ class CRAProblem:
         if outcome.status != 0:
             return np.inf, None
         return -outcome.fun * (1 + BOUND_MARGIN) + BOUND_MARGIN, outcome.x
-
-    def _force_bounds(self, b_eq, work: float):
-        """Per vertex, the largest ``f_n`` of any RBE equilibrium whose normal forces sum to at most
-        ``work`` (:meth:`_most_work`), capped at ``force_bound`` (the MILP's big M)."""
-        system = self.system
-        s = len(system.points)
-        cap = min(self.force_bound, work)
-        bounds = np.full(s, cap)
-        box = system.bounds.copy()
-        box[0::3, 1] = cap
-        total = sp.csr_matrix(np.tile([1.0, 0.0, 0.0], s))
-        a_ub = sp.vstack([system.a_ub, total], format="csr")
-        b_ub = np.concatenate([np.zeros(system.a_ub.shape[0]), [cap]])
-        for v in range(s):
-            cost = np.zeros(3 * s)
-            cost[3 * v] = -1.0
-            outcome = linprog(cost, A_ub=a_ub, b_ub=b_ub, A_eq=system.a_eq, b_eq=b_eq, bounds=box, method="highs")
-            if outcome.status == 0:
-                bounds[v] = min(cap, -outcome.fun * (1 + BOUND_MARGIN) + BOUND_MARGIN)
-        return bounds
-
-    def _milp(self, b_eq, force_bounds, sectors, time_limit, tightened: bool = True):
-        """Forces and motion of the relaxation, ``None`` if infeasible, or a message if HiGHS did not decide.
-
-        ``force_bounds`` are :meth:`_force_bounds` for this load, the big Ms of ``f_n``.
-
-        Beside Eqs. (9)-(10) with big Ms, three families of rows hold for every solution of (11) and
-        tighten the relaxation (``tightened``): the virtual-work row ``b.q + sum f_n <= 0``, friction
-        only at closed vertices, and the face cuts of :attr:`_diagonals`.  Without them, and with the big
-        Ms :data:`LOOSE` times larger, the MILP is a second, numerically different route to the same
-        answer, which :meth:`solve` asks before it calls an assembly unstable.
-        """
-        system, d = self.system, self.kinematic
-        s, free = len(system.points), system.a_eq.shape[0]
-        if s == 0:
-            return None if not np.allclose(b_eq, 0.0) else (np.zeros((0, 3)), np.zeros(free))
-        n_f, n_q, n_z, n_s = 3 * s, free, s, s * sectors
-        size = n_f + n_q + n_z + n_s
-        of, oq, oz, os_ = 0, n_f, n_f + n_q, n_f + n_q + n_z
-        ratio = self.ratio
-        mu_c = -system.cone_rows[0, 0] / math.cos(math.pi / len(system.cone_rows))  # the pyramid's widest |f_t| / f_n
-        loose = 1.0 if tightened else LOOSE
-        force_bounds = force_bounds * loose
-        big_t = np.maximum(mu_c * force_bounds, 1e-9)
-        big_n, big_d = self._reach[:, 0] * loose, self._reach[:, 1] * loose + self.min_slide
-        d_n, d_u, d_v = d[0::3], d[1::3], d[2::3]
-        vertices = np.arange(s)
-        rows = []  # (matrix over x, lower, upper)
-
-        def columns(block, offset):
-            block = sp.csr_matrix(block)
-            return sp.hstack([sp.csr_matrix((block.shape[0], offset)), block,
-                              sp.csr_matrix((block.shape[0], size - offset - block.shape[1]))], format="csr")
-
-        def select(offset, component, scale=1.0, stride=3):
-            # one row per vertex v: scale_v * x[offset + stride v + component]
-            return sp.csr_matrix((np.broadcast_to(scale, s), (vertices, offset + stride * vertices + component)),
-                                 shape=(s, size))
-
-        rows.append((columns(system.a_eq, of), b_eq, b_eq))
-        rows.append((columns(system.a_ub, of), -np.inf, 0.0))
-        rows.append((select(of, 0) - select(oz, 0, force_bounds, 1), -np.inf, 0.0))  # f_n <= M_v z
-        rows.append((columns(d_n, oq) + select(oz, 0, big_n, 1), -np.inf, big_n - 1.0))  # dd_n + 1 <= M_v (1 - z)
-        angles = 2.0 * math.pi * np.arange(sectors + 1) / sectors
-        edge = np.column_stack([np.cos(angles), np.sin(angles)])
-        middle = np.column_stack([np.cos(angles[:-1] + math.pi / sectors), np.sin(angles[:-1] + math.pi / sectors)])
-        one_sector = sp.csr_matrix((np.ones(n_s), (np.repeat(vertices, sectors), os_ + np.arange(n_s))),
-                                   shape=(s, size))
-        if tightened:
-            # virtual work: b.q = f.dd = -sum f_n - sum alpha |dd_t|^2 <= -sum f_n for any solution of (11)
-            work = np.zeros(size)
-            work[oq:oq + n_q], work[of:of + n_f:3] = b_eq, 1.0
-            rows.append((sp.csr_matrix(work), -np.inf, BOUND_MARGIN))
-            rows.append((one_sector - select(oz, 0, 1.0, 1), -np.inf, 0.0))  # friction only where closed
-            cuts = self._diagonals
-            if len(cuts):
-                rows.append((sp.csr_matrix((np.tile([1.0, 1.0, -1.0], len(cuts)),
-                                            (np.repeat(np.arange(len(cuts)), 3), oz + cuts.ravel())),
-                                           shape=(len(cuts), size)), -np.inf, 1.0))
-        else:
-            rows.append((one_sector, -np.inf, 1.0))
-        no_sector = sp.diags(big_t) @ one_sector
-        for component in (1, 2):  # no sector, no friction
-            rows.append((select(of, component) - no_sector, -np.inf, 0.0))
-            rows.append((select(of, component) + no_sector, 0.0, np.inf))
-        for k in range(sectors):
-            a, b, g = edge[k], edge[k + 1], middle[k]
-            slide_a = columns(a[0] * d_v - a[1] * d_u, oq)  # a x dd_t >= 0 in the sector
-            slide_b = columns(b[1] * d_u - b[0] * d_v, oq)  # dd_t x b >= 0
-            force_a = select(of, 1, a[1]) - select(of, 2, a[0])  # a x (-f_t) >= 0
-            force_b = select(of, 2, b[0]) - select(of, 1, b[1])  # (-f_t) x b >= 0
-            along = columns(g[0] * d_u + g[1] * d_v, oq)  # g . dd_t >= min_slide
-            rows.append((slide_a - select(os_, k, big_d, sectors), -big_d, np.inf))
-            rows.append((slide_b - select(os_, k, big_d, sectors), -big_d, np.inf))
-            rows.append((force_a - select(os_, k, big_t, sectors), -big_t, np.inf))
-            rows.append((force_b - select(os_, k, big_t, sectors), -big_t, np.inf))
-            rows.append((along - select(os_, k, self.min_slide + big_d, sectors), -big_d, np.inf))
-        matrix = sp.vstack([r[0] for r in rows], format="csr")
-        lower = np.concatenate([np.broadcast_to(r[1], r[0].shape[0]) for r in rows])
-        upper = np.concatenate([np.broadcast_to(r[2], r[0].shape[0]) for r in rows])
-        low = np.concatenate([np.tile([0.0, -np.inf, -np.inf], s), np.full(n_q, -np.inf), np.zeros(n_z + n_s)])
-        high = np.concatenate([np.column_stack([force_bounds, np.full((s, 2), np.inf)]).ravel(), np.full(n_q, np.inf),
-                               np.ones(n_z + n_s)])
-        motion_rows = columns(d, oq)  # |dd| <= eta, dd_n >= -eps
-        motion_low = np.tile([-1.0, -ratio, -ratio], s)
-        integrality = np.concatenate([np.zeros(n_f + n_q), np.ones(n_z + n_s)])
-        outcome = milp(np.zeros(size), integrality=integrality, bounds=Bounds(low, high),
-                       constraints=[LinearConstraint(matrix, lower, upper),
-                                    LinearConstraint(motion_rows, motion_low, np.full(3 * s, ratio))],
-                       options={"time_limit": time_limit, "presolve": True})
-        if outcome.status == 2:
-            return None
-        if outcome.x is None:
-            return (f"the exact route is too large for this model: HiGHS did not decide the MILP "
-                    f"({n_z + n_s} binaries) within time_limit = {time_limit:g} s ({outcome.message})")
-        x = outcome.x
-        return x[of:of + n_f].reshape(-1, 3), x[oq:oq + n_q]
 
     # --- exact checks -----------------------------------------------------------------------------------------
 
