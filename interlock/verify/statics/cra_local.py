@@ -95,7 +95,7 @@ def last_resort(problem, b_eq, rbe_forces, most_work, timings, progress=None):
 def coulomb_route(problem, b_eq, frugal, check, progress=None, **options):
     """``((motion, forces), how)`` of the Coulomb fixed point started from the least-friction equilibrium
     ``frugal`` (:func:`least_friction`; ``None`` if there is none), each motion judged by ``check``, or
-    ``(None, why not)`` naming what its last motion leaves unbalanced.  ``options``: ``iterations``,
+    ``(None, why not)`` naming what its closest motion leaves unbalanced.  ``options``: ``iterations``,
     ``time_limit`` of :func:`~interlock.verify.statics.cra_coulomb.coulomb_fixed_point`."""
     if frugal is None:
         return None, "the Coulomb fixed point did not start (no least-friction equilibrium)"
@@ -127,25 +127,9 @@ def verify_local(problem, b_eq, motion, forces):
 
 def snap(problem, motion, tolerance: float = SNAP_TOL):
     """The motion nearest (L1) to ``motion`` that closes exactly the vertices it nearly closes
-    (``dd_n + eps <= tolerance * eps``) and keeps the others open; ``None`` if there is none."""
-    d = problem.kinematic
-    dd = (d @ motion).reshape(-1, 3)
-    near = dd[:, 0] + 1.0 <= tolerance
-    if not near.any():
-        return None
-    n_q = d.shape[1]
-    identity = sp.eye(n_q, format="csr")
-    # unknowns (q, r) with |q - motion| <= r, minimise sum r
-    a_ub = sp.vstack([sp.hstack([identity, -identity]), sp.hstack([-identity, -identity]),
-                      sp.hstack([d, sp.csr_matrix((d.shape[0], n_q))]),
-                      sp.hstack([-d, sp.csr_matrix((d.shape[0], n_q))])], format="csr")
-    s = len(dd)
-    ratio = problem.ratio
-    b_ub = np.concatenate([motion, -motion, np.full(3 * s, ratio), np.tile([1.0, ratio, ratio], s)])
-    a_eq = sp.hstack([d[0::3][near], sp.csr_matrix((int(near.sum()), n_q))], format="csr")
-    outcome = linprog(np.concatenate([np.zeros(n_q), np.ones(n_q)]), A_ub=a_ub, b_ub=b_ub, A_eq=a_eq,
-                      b_eq=np.full(int(near.sum()), -1.0), bounds=(None, None), method="highs")
-    return outcome.x[:n_q] if outcome.status == 0 else None
+    (``dd_n + eps <= tolerance * eps``) and keeps the others open; ``None`` if there is none (HiGHS:
+    :func:`~interlock.verify.statics.cra_coulomb.shut_nearly_closed` for the local solvers' small models)."""
+    return cra_coulomb.shut_nearly_closed(problem, motion, tolerance)
 
 
 def least_friction(problem, b_eq, interior: bool = False):
