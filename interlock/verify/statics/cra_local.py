@@ -127,8 +127,8 @@ def verify_local(problem, b_eq, motion, forces):
 
 def snap(problem, motion, tolerance: float = SNAP_TOL):
     """The motion nearest (L1) to ``motion`` that closes exactly the vertices it nearly closes
-    (``dd_n + eps <= tolerance * eps``) and keeps the others open; ``None`` if there is none (HiGHS:
-    :func:`~interlock.verify.statics.cra_coulomb.shut_nearly_closed` for the local solvers' small models)."""
+    (``dd_n + eps <= tolerance * eps``) and keeps the others open; ``None`` if there is none:
+    :func:`~interlock.verify.statics.cra_coulomb.shut_nearly_closed` with the local solvers' :data:`SNAP_TOL`."""
     return cra_coulomb.shut_nearly_closed(problem, motion, tolerance)
 
 
