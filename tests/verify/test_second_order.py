@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 import trimesh
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
@@ -107,6 +107,8 @@ def test_which_body_carries_the_corner_flips_the_second_order_answer(h, c, block
 @settings(max_examples=25, deadline=None)
 @given(rotation=st.lists(st.floats(-3, 3), min_size=3, max_size=3), shift=vectors, scale=st.floats(0.2, 20),
        h=st.sampled_from([1.0, 2.0]), c=st.sampled_from([0.4, 0.5, 1.2, 2.0]))
+# found by hypothesis: entries of 5e-10 in A, dropped by HiGHS, and its presolve then saw a support of 4
+@example(rotation=[1.192092896e-07, 0.0, 0.015625], shift=np.zeros(3), scale=1.0, h=1.0, c=0.4)
 def test_the_verdict_is_invariant_under_rigid_motion_and_scaling(rotation, shift, scale, h, c):
     points, normals, p, q = _cup_constraints(h, c)
     R = Rotation.from_rotvec(rotation).as_matrix()
