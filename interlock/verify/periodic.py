@@ -395,9 +395,14 @@ def _forced_rows(M: np.ndarray, tol: float):
     m, n = M.shape
     if m == 0:
         return np.zeros(0, dtype=bool), 0.0, np.zeros(0)
-    # variables (w, y): maximise sum y subject to M^T w = 0, y <= w, 0 <= y <= 1, w >= 0
+    # variables (w, y): maximise sum y subject to M^T w = 0, y <= w, 0 <= y <= 1, w >= 0. M^T w = 0 is written
+    # as U^T w = 0 with U an orthonormal basis of M's column space: a cell turned by 1e-7 rad has columns of
+    # 1e-10 entries in M, on which HiGHS failed ("unknown" status), and U does not depend on the turn
+    u, sigma, _ = scipy.linalg.svd(M, full_matrices=False, check_finite=False)
+    span = u[:, sigma > KERNEL_RTOL * (sigma.max(initial=0.0) or 1.0)]
+    n = span.shape[1]
     cost = np.concatenate([np.zeros(m), -np.ones(m)])
-    A_eq = np.hstack([M.T, np.zeros((n, m))])
+    A_eq = np.hstack([span.T, np.zeros((n, m))])
     A_ub = np.hstack([-np.eye(m), np.eye(m)])
     result = scipy.optimize.linprog(cost, A_ub=A_ub, b_ub=np.zeros(m), A_eq=A_eq, b_eq=np.zeros(n),
                                     bounds=[(0, None)] * m + [(0, 1)] * m, method="highs")
