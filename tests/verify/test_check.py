@@ -271,3 +271,20 @@ def test_a_rhomblock_hexagon_with_one_fixed_block_is_not_interlocked():
     columns[:, 3:] /= interlocking_matrix(hexagon, [0]).length_scale
     y = A @ columns.ravel()
     assert y.min() >= -1e-7 * y.max() and y.max() > 0 and len(v.moving) == len(hexagon) - 1
+
+
+TINY_TURNS = [(1.2e-7, 0.0, 0.0156), (1e-10, 0.5, 0.0)]
+
+
+@pytest.mark.parametrize("lp_solver", ["clarabel", "highs"])
+@pytest.mark.parametrize("which", ["interlocking_cubes", "modified_cube_assembly", "tetrahedra", "versatile_blocks"])
+def test_a_tiny_turn_keeps_the_verdict_with_either_lp_solver(which, lp_solver):
+    # Turns this small put entries of 1e-9 - 1e-10 into the matrix, below what HiGHS keeps (1e-9): the periodic
+    # and second-order verifiers each gave a wrong answer on such a turn before their LPs were written for it.
+    assembly = getattr(presets, which)()
+    reference = check(assembly, validate=False, lp_solver=lp_solver)
+    for turn in TINY_TURNS:
+        motion = trimesh.transformations.euler_matrix(*turn)
+        turned = check(_moved(assembly, motion, 1.0, list(range(len(assembly)))), validate=False, lp_solver=lp_solver)
+        assert (turned.interlocked, turned.rank, turned.shape) == (reference.interlocked, reference.rank,
+                                                                   reference.shape), turn
