@@ -17,6 +17,7 @@ from interlock.errors import InterlockError
 from interlock.verify.certify import certify_reduction
 from interlock.verify.check import MOVING_RTOL, check
 from interlock.verify.contacts import contacts
+from interlock.verify.stress import widest_stress
 
 __all__ = ["EdgeQuadruple", "Symbol", "PeriodicVerdict", "edge_quadruples", "symbol", "periodic_check",
            "KERNEL_RTOL", "STRESS_TOL", "POSITIVE_Z", "PATCH_RADII"]
@@ -297,7 +298,8 @@ def _reduce(A: Symbol, at_points) -> _Reduction:
 
     while rounds <= _ROUNDS:
         z = POSITIVE_Z[z_index]
-        new, value, w = _forced_rows(A(z).real @ basis, STRESS_TOL)
+        widest = widest_stress(A(z).real @ basis, KERNEL_RTOL, STRESS_TOL)
+        new, value, w = widest.support, widest.value, widest.stress
         lp_values.append((rounds, float(z[0]), float(z[1]), value))
         grew = bool((new & ~forced).any())
         if grew:
@@ -388,28 +390,6 @@ def _rows_matrix(rows, blocks, entries, size, count, columns) -> sp.csr_matrix:
     r = np.repeat(rows, size)
     c = (size * blocks[:, None] + np.arange(size)).ravel()
     return sp.csr_matrix((entries.ravel(), (r, c)), shape=(count, columns))
-
-
-def _forced_rows(M: np.ndarray, tol: float):
-    """Rows in the support of a maximal-support ``w >= 0`` with ``M^T w = 0``, the LP value ``max sum min(w, 1)``, and ``w``."""
-    m, n = M.shape
-    if m == 0:
-        return np.zeros(0, dtype=bool), 0.0, np.zeros(0)
-    # variables (w, y): maximise sum y subject to M^T w = 0, y <= w, 0 <= y <= 1, w >= 0. M^T w = 0 is written
-    # as U^T w = 0 with U an orthonormal basis of M's column space: a cell turned by 1e-7 rad has columns of
-    # 1e-10 entries in M, on which HiGHS failed ("unknown" status), and U does not depend on the turn
-    u, sigma, _ = scipy.linalg.svd(M, full_matrices=False, check_finite=False)
-    span = u[:, sigma > KERNEL_RTOL * (sigma.max(initial=0.0) or 1.0)]
-    n = span.shape[1]
-    cost = np.concatenate([np.zeros(m), -np.ones(m)])
-    A_eq = np.hstack([span.T, np.zeros((n, m))])
-    A_ub = np.hstack([-np.eye(m), np.eye(m)])
-    result = scipy.optimize.linprog(cost, A_ub=A_ub, b_ub=np.zeros(m), A_eq=A_eq, b_eq=np.zeros(n),
-                                    bounds=[(0, None)] * m + [(0, 1)] * m, method="highs")
-    if result.status != 0:
-        return np.zeros(m, dtype=bool), 0.0, np.zeros(m)
-    w = result.x[:m]
-    return (result.x[m:] > 0.5) & (w > tol), float(-result.fun), w
 
 
 def _kernel(M: np.ndarray) -> np.ndarray:

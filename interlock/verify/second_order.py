@@ -64,6 +64,7 @@ from interlock.blocks.assembly import Assembly
 from interlock.errors import InterlockError
 from interlock.verify.contacts import DEFAULT_ANGLE_TOL, DEFAULT_CONTACT_RTOL
 from interlock.verify.contacts import model_contacts
+from interlock.verify.stress import widest_stress
 
 __all__ = ["SecondOrder", "SecondOrderError", "second_order", "prestress_stability", "gap_expansion",
            "SECOND_ORDER_RTOL", "INTERIOR_RTOL", "CUTTING_PLANES", "MAX_COLUMNS"]
@@ -263,8 +264,9 @@ def prestress_stability(points, normals, point_blocks, plane_blocks, centroids, 
                                         length_scale)
     ends = np.column_stack([column[p_blocks[live]], column[q_blocks[live]]])
     A = _rows(gradients, ends, n)
-    stress = _widest_stress(A)
-    if stress is None:
+    widest = widest_stress(A, KERNEL_RTOL)
+    stress = widest.stress
+    if not widest.support.any():
         return SecondOrder(False, f"no stress on the {len(x)} usable gap functions", **base)
     support = np.flatnonzero(stress > 0)
     A_S = A[support].toarray()
@@ -390,25 +392,6 @@ def _rows(gradients, ends, n) -> sp.csr_matrix:
         rows.append(np.repeat(np.flatnonzero(on), 6))
         cols.append((6 * block_column[on][:, None] + np.arange(6)).ravel())
     return sp.csr_matrix((np.concatenate(data), (np.concatenate(rows), np.concatenate(cols))), shape=(k, n))
-
-
-def _widest_stress(A: sp.csr_matrix):
-    """A stress ``lambda >= 0``, ``A^T lambda = 0``, positive on as many rows as possible (zero elsewhere), or None.
-
-    LP: ``max sum s`` with ``0 <= s <= 1``, ``s <= lambda``; by homogeneity the optimum
-    has ``s = 1`` on the largest support.  Without HiGHS' presolve: a model turned by 1.2e-7 rad has
-    entries of 5e-10 in ``A``, which HiGHS drops (below 1e-9), and its presolve then deduced a support
-    of 4 instead of 10 (a kernel of 4 dimensions instead of 1).
-    """
-    k, n = A.shape
-    result = linprog(np.r_[np.zeros(k), -np.ones(k)],
-                     A_ub=sp.hstack([-sp.identity(k), sp.identity(k)]).tocsr(), b_ub=np.zeros(k),
-                     A_eq=sp.hstack([A.T, sp.csr_matrix((n, k))]).tocsr(), b_eq=np.zeros(n),
-                     bounds=[(0, None)] * k + [(0, 1)] * k, method="highs", options={"presolve": False})
-    if result.status != 0 or -result.fun < 0.5:
-        return None
-    lam, s = result.x[:k], result.x[k:]
-    return np.where(s > 0.5, lam, 0.0)
 
 
 def _reduced_forms(hessians, ends, kernel) -> np.ndarray:
