@@ -161,7 +161,8 @@ def _parser() -> argparse.ArgumentParser:
     stability.add_argument("--tilt-axis", metavar="AXIS", help="also find the critical tilt about x, y, xy30 or X,Y,Z")
     stability.add_argument("--time-limit", type=float, default=None, metavar="SECONDS",
                            help="cra: seconds per MILP before local solvers get the last word and an undecided "
-                                "answer is 'inconclusive' (default 60)")
+                                "answer is 'inconclusive'; on large models (no MILP), seconds for the whole "
+                                "answer (default 60)")
     stability.add_argument("--contacts", default="interfaces", choices=("interfaces", "exact"),
                            help="interfaces: faces that meet across small gaps and tilts, relative to each block "
                                 "pair's thickness (default); exact: faces that touch")

@@ -46,8 +46,8 @@ loaded in (T) may sit at ``dd_n + 1 = 1e-6`` and count as open in the exact
 LP. A motion that the exact LP rejects, but at which it leaves at most
 :data:`SHUT_RESIDUAL` of the load unbalanced (:func:`unbalanced`), is checked
 again with the vertices within :data:`SHUT_TOL` of closed shut exactly
-(:func:`shut_nearly_closed`, by HiGHS: a vertex solution moves few blocks;
-Clarabel's interior one moved them all and left 2e-4 unbalanced).
+(:func:`shut_nearly_closed`, the L1-nearest such motion by HiGHS: a vertex
+of its LP; Clarabel's interior solution of the same LP left 2e-4 unbalanced).
 
 The iteration need not converge; where it does (shelf-stable, Fig. 12), it
 proves "stable" with linear and conic solves only. On the Armadillo vault
@@ -62,7 +62,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.optimize import linprog
+from scipy.optimize import Bounds, LinearConstraint, milp
 
 from interlock.verify.statics.equilibrium import clarabel_lp, clarabel_solve
 
@@ -182,7 +182,8 @@ def coulomb_fixed_point(problem, b_eq, normal_forces, check, iterations: int = C
         Most rounds, the weight of the new thresholds, and the rounds Anderson acceleration remembers
         (:data:`COULOMB_ITERATIONS`, :data:`COULOMB_DAMPING`, :data:`COULOMB_MEMORY`).
     time_limit : float
-        Seconds after which no new round starts.
+        Seconds within which the rounds end: a round starts only if, at the pace of the one before, it ends
+        in time.
     progress : callable, optional
         Called with ``"Coulomb fixed point, round k"`` as each round starts.
 
@@ -204,8 +205,9 @@ def coulomb_fixed_point(problem, b_eq, normal_forces, check, iterations: int = C
     stiffness = float(np.abs(b_eq).sum()) / max(s, 1)
     thresholds = radius * np.maximum(normal_forces, 0.0)
     history: list[tuple[np.ndarray, np.ndarray]] = []  # (thresholds, step) of the last rounds
-    last, best, rounds = None, np.inf, 0
-    while rounds < iterations and time.perf_counter() - started < time_limit:
+    last, best, rounds, pace = None, np.inf, 0, 0.0
+    while rounds < iterations and time.perf_counter() - started + pace < time_limit:
+        begun = time.perf_counter()
         rounds += 1
         if progress is not None:
             progress(f"Coulomb fixed point, round {rounds}")
@@ -227,6 +229,7 @@ def coulomb_fixed_point(problem, b_eq, normal_forces, check, iterations: int = C
         step = radius * np.maximum(solved.forces[:, 0], 0.0) - thresholds
         history = (history + [(thresholds, step)])[-(memory + 1):]
         thresholds = np.maximum(_anderson(history, damping), 0.0)
+        pace = time.perf_counter() - begun
     return None, rounds, last
 
 
@@ -245,10 +248,12 @@ def _anderson(history, damping: float) -> np.ndarray:
 def shut_nearly_closed(problem, motion, tolerance: float = SHUT_TOL):
     """The motion nearest (L1) to ``motion`` that closes exactly (``dd_n = -eps``) the vertices within
     ``tolerance * eps`` of closed and keeps every vertex within the bounds of (11) (``dd_n >= -eps``,
-    ``|dd| <= eta``); ``None`` if there are no such vertices or the LP fails.  An LP in ``(q, r)``:
-    ``min sum r`` with ``|q - motion| <= r``, by HiGHS' simplex: a vertex of the LP, so few blocks move (20-40 s
-    on the armadillo; Clarabel's interior solution takes seconds but moves every block a little, and left 2e-4
-    of the load unbalanced where this step proved "stable").  The exact LP judges the result.
+    ``|dd| <= eta``); ``None`` if there are no such vertices or the LP fails.  An LP in the step
+    ``q - motion = u - v`` (``u, v >= 0``, ``min sum(u + v)``) whose rows are the ranged bounds on
+    ``dd = D q`` (one row per component, not two), by HiGHS: a vertex of the LP (7 s on the armadillo
+    without block 238; 38 s as ``|q - motion| <= r`` with one-sided rows; Clarabel's interior solution of
+    the same LP left 2e-4 of the load unbalanced where this one proved "stable").  The exact LP judges the
+    result.
 
     Examples
     --------
@@ -263,21 +268,18 @@ def shut_nearly_closed(problem, motion, tolerance: float = SHUT_TOL):
     >>> np.allclose(problem.kinematic[0::3] @ shut, -1.0, rtol=0.0, atol=1e-12)
     True
     """
-    d = problem.kinematic
-    near = d[0::3] @ motion + 1.0 <= tolerance
+    d = problem.kinematic.tocsr()
+    dd = d @ motion
+    near = dd[0::3] + 1.0 <= tolerance
     if not near.any():
         return None
     n_q, s, ratio = d.shape[1], d.shape[0] // 3, problem.ratio
-    identity = sp.eye(n_q, format="csr")
-    a_eq = sp.hstack([d[0::3][near], sp.csr_matrix((int(near.sum()), n_q))], format="csr")
-    a_ub = sp.vstack([sp.hstack([identity, -identity]), sp.hstack([-identity, -identity]),
-                      sp.hstack([d, sp.csr_matrix((d.shape[0], n_q))]),
-                      sp.hstack([-d, sp.csr_matrix((d.shape[0], n_q))])], format="csr")
-    b_eq = np.full(int(near.sum()), -1.0)
-    b_ub = np.concatenate([motion, -motion, np.full(3 * s, ratio), np.tile([1.0, ratio, ratio], s)])
-    cost = np.concatenate([np.zeros(n_q), np.ones(n_q)])
-    outcome = linprog(cost, A_ub=a_ub, b_ub=b_ub, A_eq=a_eq, b_eq=b_eq, bounds=(None, None), method="highs")
-    return outcome.x[:n_q] if outcome.status == 0 else None
+    low, high = np.tile([-1.0, -ratio, -ratio], s) - dd, np.full(3 * s, ratio) - dd
+    shut = 3 * np.flatnonzero(near)
+    low[shut] = high[shut] = -1.0 - dd[shut]
+    outcome = milp(np.ones(2 * n_q), constraints=LinearConstraint(sp.hstack([d, -d], format="csr"), low, high),
+                   bounds=Bounds(0.0, np.inf))  # no integer variables: HiGHS' LP, with ranged rows
+    return motion + outcome.x[:n_q] - outcome.x[n_q:] if outcome.status == 0 else None
 
 
 def unbalanced(problem, b_eq, motion):

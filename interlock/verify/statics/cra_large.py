@@ -46,8 +46,6 @@ LARGE_VERTICES = 2000
 #: (equilibrium, ``f_n >= 0``, ``alpha >= 0``, the friction pyramid) is at most this times the load
 #: (forces in units of the free blocks' weight): HiGHS' feasibility tolerance is 1e-7.
 CHECK_RTOL = 1e-7
-#: Most rounds of the Coulomb fixed point on a large model (about 5 s each on the armadillo vault).
-LARGE_COULOMB_ROUNDS = 8
 #: Closed vertices are those with ``dd_n + eps <= SNAP * eps`` in an interior-point motion (then made exact).
 SNAP = 1e-6
 
@@ -117,8 +115,8 @@ def carries(problem, b_eq, closed: np.ndarray) -> bool | None:
 def decide_large(problem, b_eq, binaries: int, timings: dict, time_limit: float = np.inf, progress=None):
     """``(status, forces, motion, message)`` for a large model (see the module docstring); forces in units of
     the free blocks' weight, the motion in units of ``eps``.  ``binaries``: the MILP's size, for the message;
-    ``time_limit``: seconds after which the Coulomb fixed point starts no new round; ``progress(words)``, if
-    given, is told as each stage starts."""
+    ``time_limit``: seconds from the call within which the Coulomb fixed point's rounds end; ``progress(words)``,
+    if given, is told as each stage starts."""
     started = time.perf_counter()
     if progress is not None:
         progress("the motion of most work")
@@ -144,8 +142,7 @@ def decide_large(problem, b_eq, binaries: int, timings: dict, time_limit: float 
     if found is None:
         frugal = cra_local.least_friction(problem, b_eq, interior=True)
         result, coulomb = cra_local.coulomb_route(problem, b_eq, frugal, lambda m: exact(problem, b_eq, m),
-                                                  progress, iterations=LARGE_COULOMB_ROUNDS,
-                                                  time_limit=time_limit - (time.perf_counter() - started))
+                                                  progress, time_limit=time_limit - (time.perf_counter() - started))
         if result is not None:
             found = (*result, coulomb)
     if found is not None:
