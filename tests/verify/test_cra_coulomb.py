@@ -59,10 +59,10 @@ def test_tresca_leans_on_eta_when_the_thresholds_cannot_hold_the_load():
 def test_fixed_point_proves_a_cube_on_a_slope_stable(angle):
     # friction angle of mu = 0.5: 26.57 degrees; the exact LP accepts the motion, which slides down the slope
     problem, b_eq = _problem(_stack(), 0.5, tilted_gravity("x", angle))
-    found, rounds, last = _fixed_point(problem, b_eq)
-    assert found is not None and rounds >= 1
-    motion, forces = found
-    assert np.array_equal(motion, last)
+    fixed_point = _fixed_point(problem, b_eq)
+    assert fixed_point.found is not None and fixed_point.rounds >= 1
+    motion, forces = fixed_point.found
+    assert np.array_equal(motion, fixed_point.closest) and fixed_point.residual == 0.0
     assert problem.system.a_eq @ forces.ravel() == pytest.approx(b_eq, abs=1e-7)
     down = tilted_gravity("x", angle)
     down[2] = 0.0
@@ -80,7 +80,7 @@ def test_fixed_point_invariant_under_rigid_motion_and_scale(seed, scale):
     meshes = [m.copy().apply_scale(scale).apply_transform(_affine(turn.as_matrix(), shift))
               for m in _stack().meshes]
     problem, b_eq = _problem(Assembly.from_meshes(meshes, frame=[0]), 0.5, turn.apply(tilted_gravity("x", 20)))
-    found, _, _ = _fixed_point(problem, b_eq)
+    found = _fixed_point(problem, b_eq).found
     assert found is not None
     dd = (problem.kinematic @ found[0]).reshape(-1, 3)
     assert int((dd[:, 0] + 1 <= 1e-7).sum()) == 4
@@ -108,12 +108,14 @@ def test_shelf_fixed_point_names_the_blocks_it_cannot_balance(reference_data):
     assembly = load_compas(reference_data / "compas_cra" / "shelf.json")
     problem = CRAProblem.build(assembly, 0.9, contacts=contacts(assembly))
     b_eq, _ = problem._right_hand_side(np.array([0.0, 0.0, -1.0]))
-    found, rounds, last = _fixed_point(problem, b_eq)
-    assert found is None and rounds == cra_coulomb.COULOMB_ITERATIONS
-    residual, blocks = cra_coulomb.unbalanced(problem, b_eq, last)
-    assert residual > 1e-3 and blocks == (9, 10)
-    words = cra_coulomb.describe(problem, b_eq, rounds, last)
-    assert f"ran {rounds} rounds" in words and "at its closest motion" in words and "at 2 blocks (9, 10)" in words
+    fixed_point = _fixed_point(problem, b_eq)
+    assert fixed_point.found is None and fixed_point.rounds == cra_coulomb.COULOMB_ITERATIONS
+    residual, blocks = cra_coulomb.unbalanced(problem, b_eq, fixed_point.closest)  # measured again: the same
+    assert residual > 1e-3 and blocks == (9, 10) == fixed_point.unbalanced_blocks
+    assert fixed_point.residual == pytest.approx(residual, rel=1e-6)
+    words = cra_coulomb.describe(fixed_point)
+    assert f"ran {fixed_point.rounds} rounds" in words and "at its closest motion" in words
+    assert "at 2 blocks (9, 10)" in words
 
 
 def test_progress_names_each_stage_and_round(reference_data):

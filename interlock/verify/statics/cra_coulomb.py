@@ -67,7 +67,7 @@ from scipy.optimize import Bounds, LinearConstraint, milp
 from interlock.verify.statics.equilibrium import clarabel_lp, clarabel_solve
 
 __all__ = ["COULOMB_ITERATIONS", "COULOMB_DAMPING", "COULOMB_MEMORY", "SHUT_TOL", "SHUT_RESIDUAL", "TrescaSolution",
-           "tresca", "coulomb_fixed_point", "shut_nearly_closed", "unbalanced", "describe"]
+           "FixedPoint", "tresca", "coulomb_fixed_point", "shut_nearly_closed", "unbalanced", "describe"]
 
 #: Most rounds of the fixed point (shelf-stable is accepted after 15).
 COULOMB_ITERATIONS = 40
@@ -105,6 +105,31 @@ class TrescaSolution:
     forces: np.ndarray
     eta_active: int
     status: str
+
+
+@dataclass(frozen=True)
+class FixedPoint:
+    """What :func:`coulomb_fixed_point` found.
+
+    Attributes
+    ----------
+    found : (motion, forces) or None
+        A motion the exact LP accepts (as (T) gave it, or with its nearly closed vertices shut), with its forces.
+    rounds : int
+        Rounds run.
+    closest : ndarray (6 f,) or None
+        The motion that came closest: the least :func:`unbalanced` residual (the accepted one when found).
+    residual : float or None
+        That residual, a fraction of the load (``None`` if no round's motion stayed within the bounds of (11)).
+    unbalanced_blocks : tuple of int
+        The free blocks (assembly indices) the closest motion leaves unbalanced.
+    """
+
+    found: tuple | None
+    rounds: int
+    closest: np.ndarray | None
+    residual: float | None
+    unbalanced_blocks: tuple
 
 
 def tresca(problem, b_eq, thresholds, stiffness: float) -> TrescaSolution | None:
@@ -167,7 +192,7 @@ def tresca(problem, b_eq, thresholds, stiffness: float) -> TrescaSolution | None
 def coulomb_fixed_point(problem, b_eq, normal_forces, check, iterations: int = COULOMB_ITERATIONS,
                         damping: float = COULOMB_DAMPING, memory: int = COULOMB_MEMORY, time_limit: float = np.inf,
                         progress=None):
-    """Iterate (T) towards Coulomb's law (module docstring) and return ``(found, rounds, last)``.
+    """Iterate (T) towards Coulomb's law (module docstring) and return a :class:`FixedPoint`.
 
     Parameters
     ----------
@@ -189,12 +214,7 @@ def coulomb_fixed_point(problem, b_eq, normal_forces, check, iterations: int = C
 
     Returns
     -------
-    found : (motion, forces) or None
-        A motion the exact LP accepts (as (T) gave it, or with its nearly closed vertices shut), with its forces.
-    rounds : int
-        Rounds run.
-    last : ndarray (6 f,) or None
-        The motion that came closest (the least :func:`unbalanced` residual), for the report.
+    FixedPoint
 
     The stiffness is ``|b|_1 / s``: a vertex carrying an average share of the load
     slides by about ``eps`` before it slips.
@@ -205,7 +225,7 @@ def coulomb_fixed_point(problem, b_eq, normal_forces, check, iterations: int = C
     stiffness = float(np.abs(b_eq).sum()) / max(s, 1)
     thresholds = radius * np.maximum(normal_forces, 0.0)
     history: list[tuple[np.ndarray, np.ndarray]] = []  # (thresholds, step) of the last rounds
-    last, best, rounds, pace = None, np.inf, 0, 0.0
+    closest, best, blocks, rounds, pace = None, None, (), 0, 0.0
     while rounds < iterations and time.perf_counter() - started + pace < time_limit:
         begun = time.perf_counter()
         rounds += 1
@@ -216,21 +236,20 @@ def coulomb_fixed_point(problem, b_eq, normal_forces, check, iterations: int = C
             break
         forces = check(solved.motion)
         if forces is not None:
-            return (solved.motion, forces), rounds, solved.motion
-        residual, _ = unbalanced(problem, b_eq, solved.motion)
-        residual = np.inf if residual is None else residual
-        if last is None or residual < best:
-            best, last = residual, solved.motion
-        if residual <= SHUT_RESIDUAL:  # nearly a solution: shut the nearly closed vertices exactly
-            shut = shut_nearly_closed(problem, solved.motion)
+            return FixedPoint((solved.motion, forces), rounds, solved.motion, 0.0, ())
+        residual, unbalanced_at = unbalanced(problem, b_eq, solved.motion)
+        if closest is None or (residual is not None and (best is None or residual < best)):
+            closest, best, blocks = solved.motion, residual, unbalanced_at
+        if residual is not None and residual <= SHUT_RESIDUAL:  # nearly a solution: shut the nearly closed
+            shut = shut_nearly_closed(problem, solved.motion)  # vertices exactly
             forces = None if shut is None else check(shut)
             if forces is not None:
-                return (shut, forces), rounds, shut
+                return FixedPoint((shut, forces), rounds, shut, 0.0, ())
         step = radius * np.maximum(solved.forces[:, 0], 0.0) - thresholds
         history = (history + [(thresholds, step)])[-(memory + 1):]
         thresholds = np.maximum(_anderson(history, damping), 0.0)
         pace = time.perf_counter() - begun
-    return None, rounds, last
+    return FixedPoint(None, rounds, closest, best, blocks)
 
 
 def _anderson(history, damping: float) -> np.ndarray:
@@ -305,13 +324,13 @@ def unbalanced(problem, b_eq, motion):
     return float(slack.sum()) / scale, tuple(int(k) for k in blocks)
 
 
-def describe(problem, b_eq, rounds: int, last) -> str:
-    """What the Coulomb fixed point left undone after ``rounds``, at ``last`` (its closest motion), in words."""
-    if last is None:
+def describe(fixed_point: FixedPoint) -> str:
+    """What the Coulomb fixed point left undone, at its closest motion, in words."""
+    rounds, blocks = fixed_point.rounds, fixed_point.unbalanced_blocks
+    if fixed_point.closest is None:
         return f"the Coulomb fixed point stopped after {rounds} rounds: its convex problem had no solution"
-    residual, blocks = unbalanced(problem, b_eq, last)
-    if residual is None:
+    if fixed_point.residual is None:
         return f"the Coulomb fixed point ran {rounds} rounds; its closest motion leaves the bounds of (11)"
     shown = ", ".join(map(str, blocks[:8])) + (", ..." if len(blocks) > 8 else "")
     return (f"the Coulomb fixed point ran {rounds} rounds; at its closest motion the exact LP leaves "
-            f"{residual:.2g} of the load unbalanced, at {len(blocks)} blocks ({shown})")
+            f"{fixed_point.residual:.2g} of the load unbalanced, at {len(blocks)} blocks ({shown})")

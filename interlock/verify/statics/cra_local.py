@@ -99,11 +99,10 @@ def coulomb_route(problem, b_eq, frugal, check, progress=None, **options):
     ``time_limit`` of :func:`~interlock.verify.statics.cra_coulomb.coulomb_fixed_point`."""
     if frugal is None:
         return None, "the Coulomb fixed point did not start (no least-friction equilibrium)"
-    found, rounds, last = cra_coulomb.coulomb_fixed_point(problem, b_eq, frugal[:, 0], check, progress=progress,
-                                                          **options)
-    if found is not None:
-        return found, f"the Coulomb fixed point ({rounds} convex frictional-contact solves)"
-    return None, cra_coulomb.describe(problem, b_eq, rounds, last)
+    fixed_point = cra_coulomb.coulomb_fixed_point(problem, b_eq, frugal[:, 0], check, progress=progress, **options)
+    if fixed_point.found is not None:
+        return fixed_point.found, f"the Coulomb fixed point ({fixed_point.rounds} convex frictional-contact solves)"
+    return None, cra_coulomb.describe(fixed_point)
 
 
 def verify_local(problem, b_eq, motion, forces):
