@@ -66,7 +66,8 @@ def _no_coulomb(monkeypatch):
     """Take the Coulomb fixed point away, so that the local solvers after it are reached."""
     from interlock.verify.statics import cra_coulomb
 
-    monkeypatch.setattr(cra_coulomb, "coulomb_fixed_point", lambda *args, **kwargs: (None, 0, None))
+    monkeypatch.setattr(cra_coulomb, "coulomb_fixed_point",
+                        lambda *args, **kwargs: cra_coulomb.FixedPoint(None, 0, None, None, ()))
 
 
 def test_an_undecided_milp_ends_in_the_coulomb_fixed_point(monkeypatch):

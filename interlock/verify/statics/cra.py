@@ -59,7 +59,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
-from functools import cached_property
+from functools import cache, cached_property
 
 import numpy as np
 import scipy.sparse as sp
@@ -350,7 +350,8 @@ class CRAProblem:
                                 timings)
         progress("quick answers")
         work, most_work = self._most_work(b_eq) if status_rbe == 0 else (np.inf, None)
-        quick = self._quick(b_eq, rbe_forces if status_rbe == 0 else None, known, most_work)
+        frugal = cache(lambda: cra_local.least_friction(self, b_eq))  # for _quick and _local, once
+        quick = self._quick(b_eq, rbe_forces if status_rbe == 0 else None, known, most_work, frugal)
         timings["lp"] += time.perf_counter() - started
         if quick is not None:
             status, forces, motion, message = quick
@@ -360,7 +361,7 @@ class CRAProblem:
         local = None  # (found, how) of the local solvers, once run
         binaries = len(self.system.points) * (1 + sectors)
         if binaries > LOCAL_FIRST_BINARIES:  # a MILP this large rarely decides in time: local solvers first
-            local = self._local(b_eq, rbe_forces, most_work, timings, progress)
+            local = self._local(b_eq, rbe_forces, most_work, frugal, timings, progress)
             if local[0] is not None:
                 motion, forces = local[0]
                 message = (f"equilibrium realised by a virtual motion, found by {local[1]} (tried before the MILP, "
@@ -401,8 +402,8 @@ class CRAProblem:
                 break
             message = f"the MILP's motions could not be made exact with up to {count} sectors"
         if status == "inconclusive":  # last resort: local solves of (11), checked by the exact LP
-            found, how = local if local is not None else self._local(b_eq, rbe_forces, most_work, timings,
-                                                                     progress)
+            found, how = local if local is not None else self._local(b_eq, rbe_forces, most_work, frugal,
+                                                                     timings, progress)
             if found is not None:
                 status, (motion, forces) = "stable", found
                 message = (f"equilibrium realised by a virtual motion, found by {how} (the MILP did not decide: "
@@ -413,26 +414,29 @@ class CRAProblem:
         return self._result(status, message, forces * total if status == "stable" else None,
                             motion if status == "stable" else None, parameters, timings)
 
-    def _local(self, b_eq, rbe_forces, most_work, timings, progress):
-        """:func:`~interlock.verify.statics.cra_local.last_resort`, timed (``lp``: SLSQP and the checks; ``ipopt``)."""
+    def _local(self, b_eq, rbe_forces, most_work, frugal, timings, progress):
+        """:func:`~interlock.verify.statics.cra_local.last_resort`, timed (``lp``: SLSQP and the checks; ``ipopt``);
+        ``frugal()`` gives the least-friction equilibrium."""
         started = time.perf_counter()
-        found = cra_local.last_resort(self, b_eq, rbe_forces.reshape(-1, 3), most_work, timings, progress)
+        found = cra_local.last_resort(self, b_eq, rbe_forces.reshape(-1, 3), most_work, timings, progress,
+                                      frugal=frugal())
         timings["lp"] += time.perf_counter() - started - timings.get("ipopt", 0.0)
         return found
 
-    def _quick(self, b_eq, rbe_forces, known=(), most_work=None):
+    def _quick(self, b_eq, rbe_forces, known=(), most_work=None, frugal=None):
         """Decide quickly where possible: no RBE equilibrium (``rbe_forces`` None) means "unstable" (CRA only
         removes solutions); a motion that realises an equilibrium exactly means "stable".  Tried in turn: a
         known motion (``known``, e.g. of a nearby load), the allowed motion on which the load does the most work
         (``most_work``: a block pushed into its seat), one realising the least-friction equilibrium
-        (:func:`~interlock.verify.statics.cra_local.least_friction`) and one realising RBE's least-force equilibrium.
-        ``None`` otherwise."""
+        (:func:`~interlock.verify.statics.cra_local.least_friction`; ``frugal()``, if given, returns it) and one
+        realising RBE's least-force equilibrium.  ``None`` otherwise."""
+        frugal = frugal or (lambda: cra_local.least_friction(self, b_eq))
         if rbe_forces is None:
             return "unstable", None, None, "RBE has no equilibrium, so no motion can realise one"
         forces = rbe_forces.reshape(-1, 3)
         candidates = [(lambda m=m: m, "the motion of a nearby load") for m in known]
         candidates += [(lambda: most_work, "the motion of most work"),
-                       (lambda: cra_local.realise_least_friction(self, b_eq),
+                       (lambda: None if frugal() is None else cra_local.realise(self, frugal()),
                         "a motion realising the least-friction equilibrium"),
                        (lambda: cra_local.realise(self, forces), "a motion realising RBE's least-force equilibrium")]
         candidates += [(lambda m=m: cra_local.polish(self, b_eq, forces, m),

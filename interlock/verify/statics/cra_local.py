@@ -50,7 +50,7 @@ POLISH_ITERATIONS = 50
 LEAST_FRICTION_NORMAL = 1e-3
 
 
-def last_resort(problem, b_eq, rbe_forces, most_work, timings, progress=None):
+def last_resort(problem, b_eq, rbe_forces, most_work, timings, progress=None, frugal=None):
     """``((motion, forces), how)`` of a local solve of (11) that the exact LP accepts, or ``(None, why not)``.
 
     In turn: the Coulomb fixed point (:func:`~interlock.verify.statics.cra_coulomb.coulomb_fixed_point`) from
@@ -58,9 +58,9 @@ def last_resort(problem, b_eq, rbe_forces, most_work, timings, progress=None):
     (:mod:`interlock.verify.statics.cra_ipopt`) from the motion of most work with the least-friction forces, from
     rest, and from where the assembly settles (:func:`settled_motion`); then SLSQP from where it settles
     with those vertices kept closed (up to :data:`LAST_RESORT_LIMIT` of them).  ``progress(words)``, if
-    given, is told as each solver starts.
+    given, is told as each solver starts; ``frugal``: the least-friction equilibrium when already known.
     """
-    frugal = least_friction(problem, b_eq)
+    frugal = least_friction(problem, b_eq) if frugal is None else frugal
     found, coulomb = coulomb_route(problem, b_eq, frugal, lambda motion: problem.exact(b_eq, motion),
                                    progress=progress)
     if found is not None:
