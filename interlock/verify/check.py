@@ -19,10 +19,10 @@ from interlock.blocks.assembly import Assembly
 from interlock.errors import InterlockError
 from interlock.verify.admissible import (MOVING_RTOL, bent_contacts, moving_names, rigid_across_bends, unless_bent,
                                          unless_missed)
-from interlock.verify.contacts import contacts as find_contacts, model_contacts
+from interlock.verify.contacts import DEFAULT_CONTACT_RTOL, contacts as find_contacts, model_contacts
 from interlock.verify.margin import Margin, assess, rounding_tolerance
 from interlock.verify.matrix import InterlockingMatrix, interlocking_matrix
-from interlock.verify.validate import validate as check_overlaps
+from interlock.verify.validate import refuse_overlaps_without_contact, validate as check_overlaps
 
 __all__ = ["Verdict", "check", "beyond_first_order", "STAGES", "RANK_RTOL", "RANK_CLEAR_RTOL", "GRAM_RESOLUTION", "GRAM_SURE_RTOL", "LP_TOL", "LP_SOLVERS",
            "MOVING_RTOL", "DENSE_COLUMNS", "SOLVER_THREADS", "MAX_KERNEL_PROBE", "INVERSE_ITERATIONS"]
@@ -227,9 +227,11 @@ def check(assembly: Assembly, frame=None, translational: bool = False, certify: 
     timings = {}
     if validate:
         with _stage(timings, "validate", progress):
-            check_overlaps(assembly)
+            shallow = check_overlaps(assembly)
     with _stage(timings, "contacts", progress):
         found = model_contacts(assembly, contacts)
+        if validate:  # overlaps that pass the volume rule must still be touches
+            refuse_overlaps_without_contact(assembly, shallow, found, DEFAULT_CONTACT_RTOL * assembly.scale)
     with _stage(timings, "matrix", progress):
         A = interlocking_matrix(assembly, frame, translational, contacts=found)
     fixed = tuple(sorted(set(range(len(assembly))) - set(A.free.tolist())))

@@ -2,13 +2,15 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from interlock.blocks.assembly import Assembly
 from interlock.errors import InterlockError
 
-__all__ = ["manifold_solid", "OverlapError", "overlaps", "self_intersections", "validate", "OVERLAP_RTOL",
-           "CROSSING_RTOL"]
+__all__ = ["manifold_solid", "OverlapError", "Overlap", "pair_overlaps", "overlaps", "overlaps_without_contact",
+           "refuse_overlaps_without_contact", "self_intersections", "validate", "OVERLAP_RTOL", "CROSSING_RTOL"]
 
 #: Two blocks overlap when their common volume exceeds this fraction of the smaller one; it matches
 #: the contacts' angular tolerance (a face tilted by 1e-4 rad overlaps its neighbour in a wedge of ~1e-4 x volume).
@@ -21,8 +23,23 @@ class OverlapError(InterlockError):
     """Blocks that interpenetrate, or a block that is not a valid solid."""
 
 
-def overlaps(assembly: Assembly, rtol: float = OVERLAP_RTOL) -> list[tuple[int, int, float]]:
-    """Pairs of neighbouring blocks whose intersection volume exceeds ``rtol`` of the smaller block.
+@dataclass(frozen=True)
+class Overlap:
+    """The common volume of two blocks ``i < j``.
+
+    ``thickness = 2 volume / area`` (``area``: the surface of the common solid) is its mean depth: ``d`` for
+    a thin slab of depth ``d`` between parallel faces, about a third of the depth for a block's edge pressed
+    into a face.
+    """
+
+    i: int
+    j: int
+    volume: float
+    thickness: float
+
+
+def pair_overlaps(assembly: Assembly) -> list[Overlap]:
+    """Every pair of neighbouring blocks with a common volume, however small.
 
     Intersections are exact-predicate booleans of manifold3d (float64 meshes).
     Candidate pairs come from ``assembly.neighbours``; a pair's overlap depends
@@ -30,9 +47,9 @@ def overlaps(assembly: Assembly, rtol: float = OVERLAP_RTOL) -> list[tuple[int, 
     pair is computed once (a patch of one block type has only a few kinds).
 
     >>> import trimesh
-    >>> boxes = [trimesh.creation.box(bounds=[[x, 0, 0], [x + 1, 1, 1]]) for x in (0, 0.5)]
-    >>> overlaps(Assembly.from_meshes(boxes))
-    [(0, 1, 0.5)]
+    >>> boxes = [trimesh.creation.box(bounds=[[x, 0, 0], [x + 1, 1, 1]]) for x in (0, 0.999)]
+    >>> [(o.i, o.j, round(o.volume, 9), round(o.thickness, 6)) for o in pair_overlaps(Assembly.from_meshes(boxes))]
+    [(0, 1, 0.001, 0.000998)]
     """
     import manifold3d
 
@@ -42,14 +59,41 @@ def overlaps(assembly: Assembly, rtol: float = OVERLAP_RTOL) -> list[tuple[int, 
     of_kind = []
     for r in first:
         i, j = pairs[r]
-        moved = solids[assembly.types[j]].transform(relative[r][:3, :])
-        of_kind.append(float((solids[assembly.types[i]] ^ moved).volume()))
-    found = []
-    for (i, j), kind in zip(pairs.tolist(), kind_of):
-        volume = of_kind[kind]
-        if volume > rtol * min(assembly.volumes[i], assembly.volumes[j]):
-            found.append((int(i), int(j), float(volume)))
-    return found
+        common = solids[assembly.types[i]] ^ solids[assembly.types[j]].transform(relative[r][:3, :])
+        volume, area = float(common.volume()), float(common.surface_area())
+        of_kind.append((volume, 2.0 * volume / area if area > 0 else 0.0))
+    return [Overlap(int(i), int(j), *of_kind[kind]) for (i, j), kind in zip(pairs.tolist(), kind_of)
+            if of_kind[kind][0] > 0]
+
+
+def overlaps(assembly: Assembly, rtol: float = OVERLAP_RTOL, found=None) -> list[tuple[int, int, float]]:
+    """Pairs of neighbouring blocks whose intersection volume exceeds ``rtol`` of the smaller block, as
+    ``(i, j, volume)`` (from ``found``, the :func:`pair_overlaps` of the assembly, when given).
+
+    >>> import trimesh
+    >>> boxes = [trimesh.creation.box(bounds=[[x, 0, 0], [x + 1, 1, 1]]) for x in (0, 0.5)]
+    >>> overlaps(Assembly.from_meshes(boxes))
+    [(0, 1, 0.5)]
+    """
+    found = pair_overlaps(assembly) if found is None else found
+    return [(o.i, o.j, o.volume) for o in found
+            if o.volume > rtol * min(assembly.volumes[o.i], assembly.volumes[o.j])]
+
+
+def overlaps_without_contact(found, contacts, distance: float) -> list[Overlap]:
+    """The overlaps among ``found`` deeper than ``distance`` (mean depth) between blocks with no contact.
+
+    Two blocks may overlap by as much as the contact search's distance
+    tolerance and still count as touching, and a common volume below
+    :data:`OVERLAP_RTOL` passes :func:`validate`; but blocks that overlap
+    deeper than the tolerance *without* a contact between them are neither
+    apart nor touching, and any verdict on them would be a verdict on
+    geometry the file does not describe (a centre block scaled by 1.0002
+    pushes 2e-4 into its neighbours: no contact, a volume of 1e-4 of the
+    block, and a wrong "not interlocked" before this check).
+    """
+    touching = {(min(c.i, c.j), max(c.i, c.j)) for c in contacts}
+    return [o for o in found if o.thickness > distance and (o.i, o.j) not in touching]
 
 
 def self_intersections(mesh, rtol: float = CROSSING_RTOL) -> np.ndarray:
@@ -85,21 +129,38 @@ def self_intersections(mesh, rtol: float = CROSSING_RTOL) -> np.ndarray:
     return np.column_stack([a[crossing], b[crossing]])
 
 
-def validate(assembly: Assembly, rtol: float = OVERLAP_RTOL) -> None:
-    """Raise :class:`OverlapError` naming the block if a mesh crosses itself or two blocks overlap."""
+def validate(assembly: Assembly, rtol: float = OVERLAP_RTOL) -> list[Overlap]:
+    """Raise :class:`OverlapError` naming the block if a mesh crosses itself or two blocks overlap; return the
+    smaller overlaps that pass (for :func:`overlaps_without_contact` once the contacts are known)."""
     for k, mesh in enumerate(assembly.meshes):
         crossing = self_intersections(mesh)
         if len(crossing):
             block = int(np.flatnonzero(assembly.types == k)[0]) if (assembly.types == k).any() else k
             raise OverlapError(f"block {block} ({assembly.labels[block]}) intersects itself: {len(crossing)} pairs of "
                                f"its triangles cross (e.g. faces {crossing[0].tolist()}); blocks must be simple solids")
-    found = overlaps(assembly, rtol)
+    every = pair_overlaps(assembly)
+    found = overlaps(assembly, rtol, every)
     if found:
         i, j, volume = max(found, key=lambda item: item[2])
         more = f" ({len(found) - 1} more overlapping pairs)" if len(found) > 1 else ""
         raise OverlapError(
             f"blocks {i} ({assembly.labels[i]}) and {j} ({assembly.labels[j]}) overlap in a volume of {volume:.3g} "
             f"(more than {rtol:g} of the smaller block){more}; blocks of an assembly may only touch"
+        )
+    return every
+
+
+def refuse_overlaps_without_contact(assembly: Assembly, found, contacts, distance: float) -> None:
+    """Raise :class:`OverlapError` for the deepest of :func:`overlaps_without_contact`, if any."""
+    loose = overlaps_without_contact(found, contacts, distance)
+    if loose:
+        o = max(loose, key=lambda item: item.thickness)
+        more = f" ({len(loose) - 1} more such pairs)" if len(loose) > 1 else ""
+        raise OverlapError(
+            f"blocks {o.i} ({assembly.labels[o.i]}) and {o.j} ({assembly.labels[o.j]}) overlap {o.thickness:.3g} deep "
+            f"(a volume of {o.volume:.3g}) without a face of one lying on a face of the other: deeper than the "
+            f"contact tolerance {distance:.3g}, so they are neither apart nor touching{more}; move them apart or "
+            "onto each other's faces"
         )
 
 

@@ -288,3 +288,28 @@ def test_a_tiny_turn_keeps_the_verdict_with_either_lp_solver(which, lp_solver):
         turned = check(_moved(assembly, motion, 1.0, list(range(len(assembly)))), validate=False, lp_solver=lp_solver)
         assert (turned.interlocked, turned.rank, turned.shape) == (reference.interlocked, reference.rank,
                                                                    reference.shape), turn
+
+
+@pytest.mark.parametrize("grown", [1.0002, 1.0004])
+def test_a_block_grown_into_its_neighbours_below_the_volume_rule_is_refused(grown):
+    # the centre cube of Ex. 3.6 scaled about its centroid pushes (grown - 1) of its half-side into each neighbour:
+    # too deep for a contact (1e-5 of the model size), too small a volume for the overlap rule (1e-4 of a block).
+    # Before, every contact of the centre block was dropped and the verdict was a wrong "not interlocked".
+    assembly = presets.interlocking_cubes()
+    meshes = [assembly.mesh(i) for i in range(len(assembly))]
+    centre = meshes[4]
+    middle = centre.centroid.copy()
+    centre.apply_translation(-middle).apply_scale(grown).apply_translation(middle)
+    grown_assembly = Assembly.from_meshes(meshes, frame=list(assembly.frame))
+    with pytest.raises(OverlapError, match=r"blocks \d \(.*\) and \d \(.*\) overlap .* deep .* without a face of one "
+                                           r"lying on a face of the other"):
+        check(grown_assembly)
+    assert check(grown_assembly, validate=False).interlocked is False  # what the check used to answer
+
+
+def test_a_block_grown_within_the_contact_tolerance_still_touches():
+    assembly = presets.interlocking_cubes()
+    meshes = [assembly.mesh(i) for i in range(len(assembly))]
+    middle = meshes[4].centroid.copy()
+    meshes[4].apply_translation(-middle).apply_scale(1 + 2e-6).apply_translation(middle)
+    assert check(Assembly.from_meshes(meshes, frame=list(assembly.frame))).interlocked is True

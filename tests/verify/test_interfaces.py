@@ -12,6 +12,7 @@ import trimesh
 
 from interlock.blocks import Assembly, load_compas
 from interlock.errors import InterlockError
+from interlock.verify.validate import OverlapError
 from interlock.verify import contacts
 from interlock.verify.statics import cra, rbe
 from interlock.verify.statics.equilibrium import FRICTION_RTOL, friction_utilisation
@@ -195,3 +196,38 @@ def test_armadillo_without_its_edge_block_238_is_proved_stable_by_cra(vault):
     assert result.status == "stable", result.message
     assert "Coulomb fixed point" in result.message and result.parameters.get("route") == "large"
     _certificate_holds(rest, result, (0.0, 0.0, -1.0))
+
+
+# --- interpenetrating blocks are refused, not balanced --------------------------------------------------------------
+
+
+def _box(lo, hi):
+    return trimesh.creation.box(bounds=[lo, hi])
+
+
+def test_a_block_duplicated_in_place_is_refused_by_rbe():
+    # before: "RBE stable", the copy and the original sharing the load
+    grid = [_box([x, y, 0], [x + 1, y + 1, 1]) for x in range(3) for y in range(3)]
+    twice = Assembly.from_meshes(grid + [grid[4].copy()], frame=[0, 1, 2, 3, 5, 6, 7, 8])
+    with pytest.raises(OverlapError, match=r"blocks 4 \(.*\) and 9 \(.*\) overlap 0.333 deep, more than 0.25 of the "
+                                           r"thinner one's thickness"):
+        rbe(twice, 0.5)
+
+
+def test_a_block_pushed_into_two_walls_without_an_interface_is_refused():
+    # 0.3 into each wall: shallower than the interface rule's quarter thickness (mean depth 0.19), but its faces
+    # lie 0.3 inside the walls, beyond the rule's gap, so no interface joins them; before: "RBE unstable, 0 contacts"
+    walls = [_box([-1, 0, 0], [0, 1, 3]), _box([1.7, 0, 0], [2.7, 1, 3])]
+    pushed = Assembly.from_meshes(walls + [_box([-0.3, 0, 1], [2.0, 1, 2])], frame=[0, 1])
+    with pytest.raises(OverlapError, match="overlap 0.187 deep .* without a face of one lying on a face of the other"):
+        rbe(pushed, 0.6)
+    apart = Assembly.from_meshes([walls[0], _box([1, 0, 0], [2, 1, 3]), _box([0, 0, 1], [1, 1, 2])], frame=[0, 1])
+    assert rbe(apart, 0.6).stable is True
+
+
+def test_the_reference_files_overlap_within_the_interface_rule(reference_data):
+    # the armadillo's blocks overlap up to 0.01 deep (1.4 % of a block): within a quarter of their thickness
+    for path in sorted((reference_data / "compas_cra").glob("*.json")):
+        assembly = load_compas(path)
+        found, model = statics_contacts(assembly)
+        assert model["model"] == "interfaces" and len(found) > 0, path.name

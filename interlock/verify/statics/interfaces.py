@@ -26,8 +26,9 @@ from interlock.blocks.contact import Contact, plane_bases
 from interlock.errors import InterlockError
 from interlock.verify.contacts import DEFAULT_CONTACT_RTOL
 from interlock.verify.contacts import contacts as find_contacts
+from interlock.verify.validate import OverlapError, pair_overlaps, refuse_overlaps_without_contact
 
-__all__ = ["Interfaces", "interfaces", "thickness", "compas_interfaces", "statics_contacts",
+__all__ = ["Interfaces", "interfaces", "thickness", "compas_interfaces", "statics_contacts", "refuse_deep_overlaps",
            "DEFAULT_GAP_THICKNESS", "DEFAULT_AREA_THICKNESS", "CONTACT_MODELS"]
 
 #: Largest gap between two facing faces, as a fraction of the thinner block's thickness (:func:`thickness`).
@@ -230,9 +231,23 @@ def statics_contacts(assembly: Assembly, contacts=None) -> tuple[tuple, dict]:
     defaults), ``"exact"`` (:func:`~interlock.verify.contacts.contacts` with
     its defaults: faces that touch), an :class:`Interfaces`, or a sequence of
     :class:`~interlock.blocks.contact.Contact` (given; e.g. :func:`compas_interfaces`).
+    Blocks that overlap deeper than the interface rule allows are refused (:func:`refuse_deep_overlaps`), and
+    with interfaces also blocks that overlap deeper than the exact contacts' tolerance without an interface
+    between them (:func:`~interlock.verify.validate.refuse_overlaps_without_contact`).
     """
     if contacts is None or (isinstance(contacts, str) and contacts == "interfaces"):
         contacts = interfaces(assembly)
+    found, model = _statics_contacts(assembly, contacts)
+    overlapping = pair_overlaps(assembly)
+    if isinstance(contacts, Interfaces):  # the rule meets faces across overlaps, so an overlap must be one
+        refuse_deep_overlaps(assembly, contacts.gap, contacts.thickness, overlapping)
+        refuse_overlaps_without_contact(assembly, overlapping, found, DEFAULT_CONTACT_RTOL * assembly.scale)
+    else:  # exact or given contacts: the user's model of what touches; only interpenetration is refused
+        refuse_deep_overlaps(assembly, found=overlapping)
+    return found, model
+
+
+def _statics_contacts(assembly: Assembly, contacts) -> tuple[tuple, dict]:
     if isinstance(contacts, Interfaces):
         return contacts.contacts, contacts.to_dict()
     if isinstance(contacts, str):
@@ -245,6 +260,37 @@ def statics_contacts(assembly: Assembly, contacts=None) -> tuple[tuple, dict]:
     if not all(isinstance(c, Contact) for c in found):
         raise InterfaceError("contacts must be Contact objects (interlock.verify.contacts or compas_interfaces)")
     return found, {"model": "given", "contacts": len(found)}
+
+
+def refuse_deep_overlaps(assembly: Assembly, gap: float = DEFAULT_GAP_THICKNESS, widths=None, found=None) -> None:
+    """Raise :class:`~interlock.verify.validate.OverlapError` when two blocks overlap deeper (mean depth, see
+    :class:`~interlock.verify.validate.Overlap`) than ``gap`` times the thinner one's thickness (``widths``:
+    :func:`thickness`, and ``found``: :func:`~interlock.verify.validate.pair_overlaps`, computed when not given).
+
+    The interface rule lets faces meet across gaps *and overlaps* up to that depth (the armadillo's blocks
+    overlap up to 0.01 deep, 1.4 % of a block); deeper, the blocks interpenetrate (a block duplicated in
+    place, a wedge pushed through its neighbour) and RBE would balance geometry the file does not describe.
+
+    >>> import trimesh
+    >>> boxes = [trimesh.creation.box(bounds=[[0, 0, z], [1, 1, z + 1]]) for z in (0, 0.25)]
+    >>> try:
+    ...     refuse_deep_overlaps(Assembly.from_meshes(boxes))
+    ... except OverlapError as error:
+    ...     print(str(error)[:70])
+    blocks 0 (0) and 1 (1) overlap 0.3 deep, more than 0.25 of the thinner
+    """
+    found = pair_overlaps(assembly) if found is None else found
+    if not found:
+        return
+    widths = thickness(assembly) if widths is None else widths
+    deep = [o for o in found if o.thickness > gap * min(widths[o.i], widths[o.j])]
+    if deep:
+        o = max(deep, key=lambda item: item.thickness / min(widths[item.i], widths[item.j]))
+        more = f" ({len(deep) - 1} more such pairs)" if len(deep) > 1 else ""
+        raise OverlapError(
+            f"blocks {o.i} ({assembly.labels[o.i]}) and {o.j} ({assembly.labels[o.j]}) overlap {o.thickness:.3g} deep, "
+            f"more than {gap:g} of the thinner one's thickness ({min(widths[o.i], widths[o.j]):.3g}): they "
+            f"interpenetrate{more}; blocks may only touch or meet across small gaps and overlaps")
 
 
 def compas_interfaces(path, assembly: Assembly) -> tuple[Contact, ...]:
