@@ -300,7 +300,6 @@ def _run_groups(args) -> int:
 
 
 def _run_verify(args) -> int:
-    from interlock.blocks import Assembly
     from interlock.verify import check
 
     from tqdm import tqdm
@@ -308,7 +307,7 @@ def _run_verify(args) -> int:
     from interlock.verify.check import STAGES
 
     paths = args.paths[0] if len(args.paths) == 1 else args.paths
-    assembly = Assembly.load(paths, frame=None if args.fixed is None else _indices(args.fixed))
+    assembly = _load(paths, args.fixed)
     stages = [s for s in STAGES if (s != "certify" or args.certify) and (s != "beyond" or args.order == 2)]
     with tqdm(total=len(stages), desc="verify", unit="stage", disable=None, leave=False) as bar:
         def announce(stage):
@@ -402,12 +401,11 @@ def _run_periodic(args) -> int:
 def _run_stability(args) -> int:
     from tqdm import tqdm
 
-    from interlock.blocks import Assembly
     from interlock.verify import critical_tilt, rbe
     from interlock.verify.statics import cra
 
     paths = args.paths[0] if len(args.paths) == 1 else args.paths
-    assembly = Assembly.load(paths) if args.fixed is None else Assembly.load(paths, frame=_indices(args.fixed))
+    assembly = _load(paths, args.fixed)
     if not assembly.frame:  # the library's message speaks of frame=[...]; a CLI user gives --fixed
         stored = "no supports are marked in the file" if args.fixed is None else "--fixed names none"
         raise InterlockError(f"the assembly has no supports ({stored}): give the fixed blocks with --fixed, "
@@ -594,7 +592,6 @@ def _limit(args) -> dict:
 def _run_convert(args) -> int:
     from pathlib import Path
 
-    from interlock.blocks import Assembly
     from interlock.gallery import export
 
     if Path(args.target).suffix.lower() not in OUTPUT_SUFFIXES:
@@ -604,8 +601,7 @@ def _run_convert(args) -> int:
     from tqdm import tqdm
 
     with tqdm(desc=f"convert: reading {Path(args.source).name}", unit="block", disable=None, leave=False) as bar:
-        assembly = Assembly.load(args.source, frame=None if args.fixed is None else _indices(args.fixed),
-                                 progress=_bar_progress(bar))
+        assembly = _load(args.source, args.fixed, progress=_bar_progress(bar))
     with tqdm(desc=f"convert: writing {Path(args.target).name}", unit="block", disable=None, leave=False) as bar:
         path = export(assembly, args.target, progress=_bar_progress(bar))
     print(f"wrote {path}: {len(assembly)} blocks, frame {_frame_text(assembly.frame, assembly.info.get('frame_from'))}")
@@ -655,6 +651,31 @@ def _numbers(text: str, kind, flag: str) -> list:
         raise InterlockError(f"cannot read {flag} {text!r}: expected comma-separated numbers") from None
 
 
+def _load(paths, fixed, progress=None):
+    """``Assembly.load`` with ``--fixed`` read as block indices in every format.  The library reads a COMPAS
+    file's frame as node keys (what its ``is_support`` marks name); a CLI user counts blocks, as the output
+    does, so for ``.json`` the indices are applied after loading."""
+    from pathlib import Path
+
+    from interlock.blocks import Assembly
+
+    frame = None if fixed is None else _indices(fixed)
+    if frame is None or not isinstance(paths, (str, Path)) or Path(paths).suffix.lower() != ".json":
+        return Assembly.load(paths, frame=frame, progress=progress)
+    assembly = Assembly.load(paths, progress=progress)
+    outside = [k for k in frame if k >= len(assembly)]
+    if outside:
+        raise InterlockError(f"--fixed names block {outside[0]}, but {Path(paths).name} holds {len(assembly)} blocks "
+                             f"(indices 0-{len(assembly) - 1}; --fixed counts blocks in file order, not node keys)")
+    chosen = assembly.with_frame(sorted(set(frame)))
+    chosen.info["frame_from"] = "argument"
+    return chosen
+
+
+#: Block indices above this are refused while reading ``--fixed`` (before a range is spelled out in memory).
+LARGEST_INDEX = 10_000_000
+
+
 def _indices(text: str) -> list[int]:
     """'0,1,4-6' -> [0, 1, 4, 5, 6]."""
     out = []
@@ -662,6 +683,9 @@ def _indices(text: str) -> list[int]:
         low, dash, high = (s.strip() for s in part.partition("-"))
         if not low.isdigit() or (dash and not high.isdigit()):
             raise InterlockError(f"cannot read block list {text!r}: use indices and ranges such as 0,1 or 0-3,7")
+        if max(int(low), int(high) if dash else 0) > LARGEST_INDEX:
+            raise InterlockError(f"cannot read block list {text!r}: {part} reaches beyond block {LARGEST_INDEX:,}; "
+                                 f"give indices of the file's blocks")
         if dash and int(high) < int(low):
             raise InterlockError(f"cannot read block list {text!r}: the range {part} runs backwards; write it "
                                  f"{int(high)}-{int(low)}")

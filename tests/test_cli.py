@@ -267,3 +267,36 @@ def test_the_cli_offers_exactly_the_formats_export_writes():
     from interlock.gallery.export import FORMATS
 
     assert list(OUTPUT_SUFFIXES) == list(FORMATS)
+
+
+def _renumbered_bridge(reference_data, tmp_path):
+    """compas_cra's bridge with node keys 100, 110, ... (as after deleting blocks in COMPAS), supports marked."""
+    data = json.loads((reference_data / "compas_cra" / "bridge.json").read_text())
+    graph = data["data"]["graph"]["data"]
+    key = {k: str(int(k) * 10 + 100) for k in graph["node"]}
+    graph["node"] = {key[k]: v for k, v in graph["node"].items()}
+    for part in ("edge", "adjacency"):
+        graph[part] = {key[u]: {key[v]: w for v, w in around.items()} for u, around in graph[part].items()}
+    path = tmp_path / "bridge_keys.json"
+    path.write_text(json.dumps(data))
+    return path
+
+
+def test_fixed_counts_blocks_in_a_compas_file_too(reference_data, tmp_path, capsys):
+    # --fixed gives block indices (as the help and the output say), also where a COMPAS file's node keys differ
+    path = _renumbered_bridge(reference_data, tmp_path)
+    assert main(["verify", str(path), "--fixed", "0,15", "--json"]) in (0, 1)
+    assert json.loads(capsys.readouterr().out)["frame"] == [0, 15]
+    assert main(["verify", str(path), "--fixed", "100,250"]) == 2
+    error = capsys.readouterr().err
+    assert "--fixed names block 100, but bridge_keys.json holds 16 blocks (indices 0-15" in error
+    assert "not node keys" in error
+
+
+def test_a_huge_fixed_range_is_refused_before_it_is_spelled_out(reference_data):
+    # 0-99999999999 used to be built in memory (several GB) before the bounds check
+    wedge = reference_data / "compas_cra" / "type-a.json"
+    run = subprocess.run([sys.executable, "-m", "interlock", "verify", str(wedge), "--fixed", "0-99999999999"],
+                         capture_output=True, text=True, timeout=120)
+    assert run.returncode == 2 and "Traceback" not in run.stderr
+    assert "reaches beyond block 10,000,000" in run.stderr.strip().splitlines()[-1]
