@@ -362,15 +362,18 @@ def load_compas(path, supports=None, progress=None) -> Assembly:
     path : str or Path
     supports : iterable of int, optional
         Node keys of the fixed blocks (the frame).  Default: the nodes marked
-        ``is_support``; when none is, :data:`~interlock.blocks.compas.UPSTREAM_SUPPORTS` of the file's
-        stem (the supports of the upstream examples), else no frame.
+        ``is_support``; when none is and the file is one of the upstream examples (its node count and
+        :func:`~interlock.blocks.compas.fingerprint`, whatever its name),
+        :data:`~interlock.blocks.compas.UPSTREAM_SUPPORTS`, else no frame.
 
     Returns
     -------
     Assembly
         One block per node in increasing key order; ``labels`` are the node
-        keys (int), ``frame`` the supports, ``info`` the source, dtype and
-        whether the supports came from the file, the argument or the table.
+        keys (int), or a node's ``label`` text where it has one (then
+        ``info["node_keys"]`` lists the keys); ``frame`` the supports; ``info``
+        the source, dtype, whether the supports came from the file, the
+        argument or the table, and ``upstream_example`` when it is one.
 
     Raises
     ------

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import hashlib
 import json
 import uuid
 from pathlib import Path
@@ -14,13 +15,14 @@ from interlock.blocks.info import plain, restored
 from interlock.errors import AssemblyError
 from interlock.files import unwritable, write_atomically
 
-__all__ = ["read_compas", "write_compas", "UPSTREAM_SUPPORTS", "COMPAS_DTYPES", "BLOCK_DTYPE", "GRAPH_DTYPE",
-           "INFO_ATTRIBUTE"]
+__all__ = ["read_compas", "write_compas", "fingerprint", "UPSTREAM_SUPPORTS", "UPSTREAM_FINGERPRINTS",
+           "FINGERPRINT_ROUNDING", "COMPAS_DTYPES", "BLOCK_DTYPE", "GRAPH_DTYPE", "INFO_ATTRIBUTE"]
 
 #: Node keys that the upstream compas_cra examples fix, by file stem, for the sample files that mark no
 #: block ``is_support`` (``data/compas_cra/README.md``): the wedges, ``A``, ``H`` and the bridge stand on
 #: blocks 0 and 1; the cubes, shelves, snake, concave and curved models on block 0; the armadillo on its
-#: first course (33 blocks, as marked in upstream's solved copy).
+#: first course (33 blocks, as marked in upstream's solved copy).  :func:`read_compas` applies them only
+#: to a file that is that example (:data:`UPSTREAM_FINGERPRINTS`), whatever its name.
 UPSTREAM_SUPPORTS: dict[str, tuple[int, ...]] = {
     **{stem: (0, 1) for stem in ("type-a", "type-b", "type-c", "type-d", "A", "H", "bridge")},
     **{stem: (0,) for stem in ("cubes", "shelf", "shelf-s1", "shelf-s2", "shelf-s3", "shelf-stable", "snake",
@@ -28,6 +30,24 @@ UPSTREAM_SUPPORTS: dict[str, tuple[int, ...]] = {
                                "cube-curve-tall")},
     "armadillo": (*range(0, 8), *range(79, 89), *range(217, 228), *range(328, 332)),
 }
+#: What makes a file one of the upstream examples, by file stem: its node count and the
+#: :func:`fingerprint` of its node keys and blocks, as measured on the files of ``data/compas_cra``
+#: (all twenty differ).  A file under an example's name with other blocks is not that example.
+UPSTREAM_FINGERPRINTS: dict[str, tuple[int, str]] = {
+    "A": (3, "69bba7aa1fa381d1"), "H": (3, "3cebb28044f4acab"), "armadillo": (399, "b34b69f5b470d0f7"),
+    "bridge": (16, "4d64c747df3d45f1"), "concave-long": (2, "bb6fb4c22a150867"),
+    "concave-short": (2, "79295c03e2d881ef"), "cube-curve-short": (2, "77f5f1166f7ded73"),
+    "cube-curve-tall": (2, "ecefb15f9a1b8043"), "cubes": (3, "00ceb66e8dc2b924"),
+    "curve-3-blocks": (3, "209da09655a5f454"), "shelf-s1": (13, "3466dab42887f7f7"),
+    "shelf-s2": (12, "969a8b5ff5caf226"), "shelf-s3": (12, "4789c54f6f490328"),
+    "shelf-stable": (9, "b7d0e72c931ae5a7"), "shelf": (11, "eb64ca084a987934"), "snake": (4, "12d7ff010ea99d00"),
+    "type-a": (3, "796265e35ade0b50"), "type-b": (3, "ac7f1c6dd561f391"), "type-c": (3, "423895b3546c3f99"),
+    "type-d": (3, "0705510e9eff12b9"),
+}
+#: :func:`fingerprint` rounds vertex coordinates to this fraction of the model size (its largest bounding-box
+#: extent, rounded up to a power of ten): a copy re-saved by COMPAS (same floats, or noise of 1e-16) keeps the
+#: fingerprint, moving a vertex of a metre-sized model by a micrometre or more changes it.
+FINGERPRINT_ROUNDING = 1e-6
 
 #: ``dtype`` values of the assembly types this reader understands.
 COMPAS_DTYPES = ("compas_assembly.datastructures/Assembly", "compas_cra.datastructures/CRA_Assembly")
@@ -41,12 +61,29 @@ _NODE_DEFAULTS = {"x": 0.0, "y": 0.0, "z": 0.0, "block": None, "is_support": Fal
                   "mesh_size": None, "displacement": [0, 0, 0, 0, 0, 0], "name": None, "label": None}
 
 
-def read_compas(path, supports=None, progress=None) -> tuple[list[trimesh.Trimesh], list[int], list[int], dict]:
+def read_compas(path, supports=None, progress=None) -> tuple[list[trimesh.Trimesh], list, list[int], dict]:
     """The blocks of a COMPAS assembly JSON file: ``(meshes, labels, frame, info)``, as :func:`load_compas` uses them.
 
     See :func:`~interlock.blocks.assembly.load_compas` for the format and the
     meaning of ``supports``; ``frame`` holds block indices (positions in
-    increasing node-key order), ``labels`` the node keys.
+    increasing node-key order).  ``labels`` are the node keys, except that a
+    node with a ``label`` text (as :func:`write_compas` writes them) other than
+    its key's text is labelled by that text; then ``info["node_keys"]`` lists
+    the node keys.  Without ``supports`` and ``is_support`` marks, the frame is
+    :data:`UPSTREAM_SUPPORTS` if the file is an upstream example (its node count
+    and :func:`fingerprint` are in :data:`UPSTREAM_FINGERPRINTS`, whatever the
+    file's name; ``info["upstream_example"]`` names it), else empty.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from interlock.blocks import Assembly
+    >>> cubes = [trimesh.creation.box(bounds=[[0, 0, z], [1, 1, z + 1]]) for z in (0, 1)]
+    >>> named = Assembly.from_meshes(cubes, frame=[0], labels=["base", "keystone"])
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     meshes, labels, frame, info = read_compas(write_compas(named, Path(folder) / "two.json"))
+    >>> labels, frame, info["node_keys"], info["supports_from"]
+    (['base', 'keystone'], [0], [0, 1], 'file')
     """
     path = Path(path)
     nodes, dtype, stored = _nodes(path)  # stored: the info of a file of write_compas, else None
@@ -56,20 +93,66 @@ def read_compas(path, supports=None, progress=None) -> tuple[list[trimesh.Trimes
         if progress is not None:
             progress(k, len(keys))
         meshes.append(_block_mesh(path, key, nodes[key]))
-    labels = [_node_key(key) for key in keys]
-    frame_keys, origin = _support_keys(path, nodes, keys, labels, supports, ours=stored is not None)
-    index_of = {label: k for k, label in enumerate(labels)}
+    node_keys = [_node_key(key) for key in keys]
+    labels = [_label(nodes[key], node_key) for key, node_key in zip(keys, node_keys)]
+    frame_keys, origin, example = _support_keys(nodes, keys, node_keys, meshes, supports, ours=stored is not None)
+    index_of = {node_key: k for k, node_key in enumerate(node_keys)}
     unknown = [key for key in frame_keys if key not in index_of]
     if unknown:
         raise AssemblyError(f"support keys {unknown} are not nodes of {path.name}; its node keys are "
-                            f"{labels[0]}..{labels[-1]}")
+                            f"{node_keys[0]}..{node_keys[-1]}")
     frame = sorted(index_of[key] for key in frame_keys)
     info = {**restored(stored or {}), "source": [str(path)], "format": "compas", "dtype": dtype,
             "supports_from": origin}
+    info.pop("upstream_example", None)
+    info.pop("node_keys", None)
+    if example is not None:
+        info["upstream_example"] = example
+    if labels != node_keys:
+        info["node_keys"] = node_keys
     names = [nodes[key].get("name") for key in keys]
     if any(isinstance(name, str) for name in names):
         info["names"] = names
     return meshes, labels, frame, info
+
+
+def fingerprint(keys, meshes, rounding: float = FINGERPRINT_ROUNDING) -> str:
+    """A digest of an assembly's node keys and blocks, the same for the same file however it is named.
+
+    Each block's distinct used vertices, rounded to ``rounding`` times the
+    model size (its largest bounding-box extent, rounded up to a power of ten),
+    are hashed (SHA-256, first 16 hex digits) with the block's node key in the
+    given order.  :func:`read_compas` compares it with :data:`UPSTREAM_FINGERPRINTS`.
+
+    Parameters
+    ----------
+    keys : sequence
+        The node keys, one per block.
+    meshes : sequence of trimesh.Trimesh
+        The blocks in world coordinates.
+    rounding : float
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> cube = trimesh.creation.box(bounds=[[0, 0, 0], [1, 1, 1]])
+    >>> moved = cube.copy()
+    >>> _ = moved.apply_translation([0, 0, 1e-3])
+    >>> digest = fingerprint([0], [cube])
+    >>> [digest == fingerprint(keys, blocks) for keys, blocks in [([0], [cube.copy()]), ([0], [moved]), ([1], [cube])]]
+    [True, False, False]
+    """
+    used = [np.asarray(mesh.vertices)[np.unique(mesh.faces)] for mesh in meshes]
+    size = float(np.ptp(np.vstack(used), axis=0).max()) if used else 0.0
+    quantum = rounding * 10.0 ** np.ceil(np.log10(size)) if size > 0 else rounding
+    digest = hashlib.sha256()
+    for key, points in zip(keys, used):
+        digest.update(f"{key}:".encode())
+        digest.update(np.unique(np.rint(points / quantum).astype("<i8"), axis=0).tobytes())
+    return digest.hexdigest()[:16]
 
 
 def write_compas(assembly, path, progress=None) -> Path:
@@ -77,15 +160,25 @@ def write_compas(assembly, path, progress=None) -> Path:
 
     The file is what ``compas.json_dump`` writes for a
     ``compas_assembly.datastructures.Assembly`` (compas 2, compas_assembly 0.7,
-    the assemblies compas_cra 0.8 solves): one graph node per block, keyed by
-    the block index, holding
+    the assemblies compas_cra 0.8 solves): one graph node per block, in block
+    order, keyed by
+
+    - the block's label, if the labels are distinct integers >= 0 (the node
+      keys of an assembly :func:`read_compas` read from a file whose nodes have
+      no label texts, so its keys come back as they were);
+    - else ``info["node_keys"]``, if that lists such integers, one per block
+      (the keys of a file whose nodes have label texts);
+    - else the block index.
+
+    Each node holds
 
     - ``block``: the block as a COMPAS mesh in world coordinates, outward faces;
       coplanar triangles that meet along edges are merged into one polygon face
       (so interfaces come out as whole polygons), vertices written exactly;
     - ``is_support``: whether the block is in the frame;
-    - ``name`` (``block_0007``), ``label`` (the label as text) and ``x, y, z``
-      (the block's centroid).
+    - ``name`` (``block_0007``, by block index), ``label`` (the label as
+      text; :func:`read_compas` returns it as the block's label unless it is
+      the node key's text) and ``x, y, z`` (the block's centroid).
 
     ``Assembly.info`` is kept in the assembly attribute :data:`INFO_ATTRIBUTE`
     as a JSON text (numbers, text and lists as such, other values as text; a
@@ -114,26 +207,27 @@ def write_compas(assembly, path, progress=None) -> Path:
     >>> grid = presets.cube_grid()
     >>> with tempfile.TemporaryDirectory() as folder:
     ...     back = load_compas(write_compas(grid, Path(folder) / "grid.json"))
-    >>> len(back), back.frame == grid.frame, back.info["names"][:2], back.info["preset"]
-    (9, True, ['block_0000', 'block_0001'], 'cube_grid')
+    >>> len(back), back.frame == grid.frame, back.info["names"][:2], back.info["preset"], back.labels[:2]
+    (9, True, ['block_0000', 'block_0001'], 'cube_grid', ('(0, 0)', '(0, 1)'))
     """
     path = Path(path)
     if not len(assembly):
         raise AssemblyError(f"nothing to write to {path.name}: the assembly has no blocks")
     fixed = set(assembly.frame)
+    keys = _node_keys(assembly)
     nodes = {}
-    for i in range(len(assembly)):
+    for i, key in enumerate(keys):
         if progress is not None:
             progress(i, len(assembly))
         mesh = assembly.mesh(i)
         x, y, z = (float(c) for c in assembly.centroids[i])
-        nodes[str(i)] = {"block": {"dtype": BLOCK_DTYPE, "data": _mesh_data(mesh, i),
-                                   "guid": str(uuid.uuid5(uuid.NAMESPACE_OID, f"interlock block {i}"))},
-                         "is_support": i in fixed, "name": f"block_{i:04d}", "label": str(assembly.labels[i]),
-                         "x": x, "y": y, "z": z}
+        nodes[str(key)] = {"block": {"dtype": BLOCK_DTYPE, "data": _mesh_data(mesh, i, key),
+                                     "guid": str(uuid.uuid5(uuid.NAMESPACE_OID, f"interlock block {i}"))},
+                           "is_support": i in fixed, "name": f"block_{i:04d}", "label": str(assembly.labels[i]),
+                           "x": x, "y": y, "z": z}
     graph = {"attributes": {}, "default_node_attributes": _NODE_DEFAULTS,
              "default_edge_attributes": {"interfaces": None}, "node": nodes, "edge": {key: {} for key in nodes},
-             "max_node": len(assembly) - 1}
+             "max_node": max(keys)}
     document = {"dtype": COMPAS_DTYPES[0],
                 "data": {"attributes": {"name": "Assembly", INFO_ATTRIBUTE: json.dumps(plain(assembly.info))},
                          "graph": {"dtype": GRAPH_DTYPE, "data": graph}}}
@@ -141,14 +235,25 @@ def write_compas(assembly, path, progress=None) -> Path:
     return path
 
 
-def _mesh_data(mesh: trimesh.Trimesh, i: int) -> dict:
+def _node_keys(assembly) -> list[int]:
+    """The node keys of :func:`write_compas`: the labels, else ``info["node_keys"]``, if they are keys; else indices."""
+    for keys in (assembly.labels, assembly.info.get("node_keys")):
+        if (isinstance(keys, (list, tuple)) and len(keys) == len(assembly)
+                and all(isinstance(k, (int, np.integer)) and not isinstance(k, (bool, np.bool_)) and k >= 0
+                        for k in keys)
+                and len({int(k) for k in keys}) == len(keys)):
+            return [int(k) for k in keys]
+    return list(range(len(assembly)))
+
+
+def _mesh_data(mesh: trimesh.Trimesh, i: int, key: int) -> dict:
     """A COMPAS mesh's data: the used vertices, faces as polygons (coplanar triangles merged)."""
     polygons = _polygons(mesh)
     used = np.unique(np.concatenate([np.asarray(p) for p in polygons]))
     number = {int(v): k for k, v in enumerate(used.tolist())}
     vertex = {str(k): dict(zip("xyz", p)) for k, p in enumerate(mesh.vertices[used].tolist())}
     face = {str(f): [number[v] for v in polygon] for f, polygon in enumerate(polygons)}
-    return {"attributes": {"name": f"block_{i:04d}", "node": i},
+    return {"attributes": {"name": f"block_{i:04d}", "node": key},
             "default_vertex_attributes": {"x": 0.0, "y": 0.0, "z": 0.0}, "default_edge_attributes": {},
             "default_face_attributes": {}, "vertex": vertex, "face": face,
             "facedata": {key: {} for key in face}, "edgedata": {}, "max_vertex": len(vertex) - 1,
@@ -239,18 +344,32 @@ def _node_key(key):
         return key
 
 
-def _support_keys(path: Path, nodes: dict, keys, labels, supports, ours: bool = False) -> tuple[list, str]:
-    """The support node keys and where they came from; a file of :func:`write_compas` (``ours``) states its frame."""
+def _support_keys(nodes: dict, keys, node_keys, meshes, supports, ours: bool = False) -> tuple[list, str, str | None]:
+    """The support node keys, where they came from, and the upstream example the file is (else None).
+
+    A file of :func:`write_compas` (``ours``) states its frame; the upstream supports apply only to a file
+    whose node count and :func:`fingerprint` are an example's (:data:`UPSTREAM_FINGERPRINTS`).
+    """
     if supports is not None:
         if isinstance(supports, (str, bytes)) or not hasattr(supports, "__iter__"):
             raise AssemblyError(f"supports must be an iterable of node keys, got {supports!r}")
-        return list(supports), "argument"
-    marked = [label for key, label in zip(keys, labels) if nodes[key].get("is_support")]
+        return list(supports), "argument", None
+    marked = [node_key for key, node_key in zip(keys, node_keys) if nodes[key].get("is_support")]
     if marked or ours:
-        return marked, "file"
-    if path.stem in UPSTREAM_SUPPORTS:
-        return list(UPSTREAM_SUPPORTS[path.stem]), "upstream examples"
-    return [], "none"
+        return marked, "file", None
+    candidates = [stem for stem, (count, _) in UPSTREAM_FINGERPRINTS.items() if count == len(keys)]
+    if candidates:
+        digest = fingerprint(node_keys, meshes)
+        for stem in candidates:
+            if UPSTREAM_FINGERPRINTS[stem][1] == digest:
+                return list(UPSTREAM_SUPPORTS[stem]), "upstream examples", stem
+    return [], "none", None
+
+
+def _label(node: dict, node_key):
+    """A node's label: its ``label`` text unless that is missing, empty or its key's text; else the key."""
+    label = node.get("label")
+    return label if isinstance(label, str) and label and label != str(node_key) else node_key
 
 
 def _block_mesh(path: Path, key, node) -> trimesh.Trimesh:

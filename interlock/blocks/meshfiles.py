@@ -7,6 +7,7 @@ import io
 import math
 import os
 import re
+import warnings
 import zipfile
 from dataclasses import dataclass
 from pathlib import Path
@@ -21,7 +22,8 @@ from interlock.blocks.repair import (closed_groups, group_meshes, split_t_juncti
 from interlock.errors import AssemblyError
 
 __all__ = ["MeshFile", "read_mesh_file", "file_header", "HEADER_MARKER", "STL_RECORD", "BLOCK_DATA",
-           "FIXED_DATA", "FIXED_WORD", "STL_FIXED_BIT", "STL_MAX_FRAMED", "OBJ_SECOND_LINE"]
+           "FIXED_DATA", "FIXED_WORD", "STL_FIXED_BIT", "STL_MAX_FRAMED", "OBJ_SECOND_LINE", "GLTF_TO_Z_UP",
+           "GLTF_SUFFIXES"]
 
 #: How an exported file says that it holds interlock blocks, and how many: the start of a binary STL's
 #: 80-byte header, a PLY or OBJ comment, GLB scene extras, 3MF model metadata (see :func:`file_header`).
@@ -43,6 +45,19 @@ STL_MAX_FRAMED = STL_FIXED_BIT
 #: How the second line of an OBJ export starts (after its :func:`file_header`): a file with it and without a
 #: readable header is damaged.
 OBJ_SECOND_LINE = "# one object per block, named 'fixed' in the frame"
+#: glTF 2.0 says +Y is up; interlock's gravity is along -Z.  This rotation turns glTF coordinates into
+#: interlock's, ``(x, y, z) -> (x, -z, y)``: reading applies it to every node, writing its inverse (transpose),
+#: so a file written and read back has the same coordinates to the last bit (the entries are 0 and +-1).
+GLTF_TO_Z_UP = np.array([[1.0, 0, 0, 0], [0, 0, -1, 0], [0, 1, 0, 0], [0, 0, 0, 1]])
+#: The suffixes of glTF files, read and written +Y up (:data:`GLTF_TO_Z_UP`).
+GLTF_SUFFIXES = (".glb", ".gltf")
+# The formats read by meshio (:func:`_meshio_triangles`).
+_MESHIO_SUFFIXES = (".vtu", ".xdmf")
+# A mesh whose signed volume is below this fraction of its unsigned one is flat: trimesh may divide by its
+# volume 0 (a warning).  Loose on purpose: it only picks the meshes whose volume is computed with warnings off.
+_FLAT_RTOL = 1e-9
+# an ASCII STL vertex line with a coordinate NaN or infinite (as Python and trimesh parse them)
+_NOT_FINITE_VERTEX = re.compile(rb"(?im)^[ \t]*vertex[ \t][^\n]*?(?<![\w.])[-+]?(?:nan|inf(?:inity)?)\b")
 _HEADER = re.compile(re.escape(HEADER_MARKER.decode()) + r"(\d+)(?: fixed=(\d+))?(?: triangles=(\d+))?")
 
 
@@ -88,12 +103,15 @@ def read_mesh_file(path, split: bool = True) -> MeshFile:
 
     Stored block indices win (STL, PLY, VTU, XDMF from
     :func:`~interlock.gallery.export.export`), then the file's objects (OBJ
-    ``o``, GLB nodes, 3MF items), then, for OBJ, the bodies that share vertex
-    indices or else runs of ``v`` lines.  The frame is read from where
+    ``o``, or ``g`` groups in a file without ``o``, GLB nodes, 3MF items), then, for OBJ, the
+    bodies that share vertex indices or else runs of ``v`` lines.  The frame is read from where
     :func:`~interlock.gallery.export.export` writes it: the STL attribute bit
     :data:`STL_FIXED_BIT`, the PLY, VTU and XDMF triangle data
     :data:`FIXED_DATA`, object, node and item names ending in
-    :data:`FIXED_WORD`.
+    :data:`FIXED_WORD`.  glTF files (``.glb``, ``.gltf``) are +Y up, as the glTF
+    specification says; their coordinates are turned to interlock's +Z up
+    (:data:`GLTF_TO_Z_UP`).  Warnings of the readers are silenced: a file is
+    read, or an :class:`AssemblyError` says in one line why not.
 
     Parameters
     ----------
@@ -109,9 +127,9 @@ def read_mesh_file(path, split: bool = True) -> MeshFile:
     Raises
     ------
     AssemblyError
-        For a missing or unreadable file, one with fewer blocks, fixed blocks
-        or triangles than it announces (cut short), or touching bodies in one
-        plain file.
+        For a missing, empty or unreadable file, one with fewer blocks, fixed blocks
+        or triangles than it announces (cut short), coordinates that are not finite
+        numbers, or touching bodies in one plain file (or welded in one OBJ object).
 
     Examples
     --------
@@ -127,8 +145,18 @@ def read_mesh_file(path, split: bool = True) -> MeshFile:
     (('left', 'right'), (1,), [0.166667, 0.166667])
     """
     path = _mesh_path(path)
-    reader = {".obj": _obj_file, ".stl": _indexed_file, ".ply": _indexed_file, ".vtu": _indexed_file,
+    reader = {".obj": _obj_file, ".stl": _stl_file, ".ply": _indexed_file, ".vtu": _indexed_file,
               ".xdmf": _indexed_file}.get(path.suffix.lower(), _scene_file)
+    with warnings.catch_warnings(), np.errstate(all="ignore"):
+        warnings.simplefilter("ignore")
+        found = _read(path, reader, split)
+        for k in _flat(found.meshes):  # trimesh warns when it divides by their volume 0: here, silenced (cached)
+            found.meshes[k].mass_properties
+    return found
+
+
+def _read(path: Path, reader, split: bool) -> MeshFile:
+    """The blocks of the file ``path`` by ``reader``, checked (:func:`read_mesh_file`)."""
     try:
         found, separated = reader(path)
         if found is None:  # a plain STL or PLY file
@@ -159,9 +187,26 @@ def _mesh_path(path) -> Path:
     path = Path(os.fsdecode(path))
     if path.is_dir():
         raise AssemblyError(f"{path} is a folder, not a mesh file; give the files in it, e.g. {path}/*.obj")
-    if not path.is_file():
+    if not path.exists():
         raise AssemblyError(f"mesh file {path} does not exist")
+    if not path.is_file():
+        raise AssemblyError(f"{path} is not a regular file (a pipe, socket or device); save the mesh to a file "
+                            "and give that")
+    if path.stat().st_size == 0 and path.suffix.lower() not in _MESHIO_SUFFIXES:  # meshio's reader says so itself
+        raise AssemblyError(f"{path} is empty (0 bytes): it holds no mesh")
     return path
+
+
+def _flat(meshes) -> list[int]:
+    """The meshes that enclose (nearly) no volume: their triangles' triple products cancel out."""
+    if not meshes:
+        return []
+    face_mesh = np.repeat(np.arange(len(meshes)), [len(m.faces) for m in meshes])
+    corners = np.vstack([m.vertices[m.faces] - m.vertices.mean(axis=0) for m in meshes])
+    triple = np.einsum("ij,ij->i", corners[:, 0], np.cross(corners[:, 1], corners[:, 2]))
+    total = np.bincount(face_mesh, triple, minlength=len(meshes))
+    scale = np.bincount(face_mesh, np.abs(triple), minlength=len(meshes))
+    return np.flatnonzero(~(np.abs(total) > _FLAT_RTOL * scale)).tolist()
 
 
 def readgroup_meshes(path, split: bool = True) -> list[tuple[str, trimesh.Trimesh]]:
@@ -184,10 +229,19 @@ def _splitgroup_meshes(path: Path, found: MeshFile) -> MeshFile:
     if len(parts) <= 1:
         return found
     if not all(part.is_watertight for part in parts):
-        raise AssemblyError(f"{path} holds several bodies that touch, which a single {path.suffix} file cannot "
-                            "separate; give one file per block, or an OBJ file with one object ('o') per block")
+        raise AssemblyError(_touching(path))
     frame = None if found.frame is None else tuple(range(len(parts))) if found.frame else ()
     return MeshFile(tuple(f"body{k}" for k in range(len(parts))), tuple(parts), frame)
+
+
+def _touching(path: Path) -> str:
+    """The error for bodies that touch in a file that cannot tell them apart."""
+    if path.suffix.lower() == ".obj":
+        return (f"{path} holds several bodies that touch and share vertices (welded), which an OBJ file without "
+                "objects cannot separate; give each block its own object ('o') or group ('g'), or export with "
+                "vertices not welded (merged) across blocks")
+    return (f"{path} holds several bodies that touch, which a single {path.suffix} file cannot separate; give one "
+            "file per block, or an OBJ file with one object ('o') or group ('g') per block")
 
 
 def _frame(path: Path, face_block, face_fixed, announced_fixed) -> tuple[int, ...]:
@@ -229,7 +283,7 @@ def _announced(text) -> tuple[int, int | None, int | None] | None:
 
 
 # --- files with a block index per triangle -------------------------------------
-def _indexed_file(path: Path) -> tuple[MeshFile | None, bool]:
+def _indexed_file(path: Path, triangles=None) -> tuple[MeshFile | None, bool]:
     """The blocks of a file that stores a block index per triangle; (None, False) if it does not.
 
     Binary STL with :data:`HEADER_MARKER` (the triangle attribute; its frame
@@ -237,10 +291,10 @@ def _indexed_file(path: Path) -> tuple[MeshFile | None, bool]:
     with an ``interlock blocks=N`` comment (face properties :data:`BLOCK_DATA`
     and :data:`FIXED_DATA`), VTU and XDMF (cell data :data:`BLOCK_DATA`,
     required, and :data:`FIXED_DATA`).  Block ``k`` is named ``block_k``
-    (four digits at least).
+    (four digits at least).  ``triangles``: what the format's reader gave, if read already.
     """
-    reader = {".stl": _stl_triangles, ".ply": _ply_triangles}.get(path.suffix.lower(), _meshio_triangles)
-    triangles = reader(path)
+    if triangles is None:
+        triangles = {".ply": _ply_triangles}.get(path.suffix.lower(), _meshio_triangles)(path)
     if triangles is None:
         return None, False
     vertices, faces, blocks, fixed, announced = triangles
@@ -258,15 +312,31 @@ def _indexed_file(path: Path) -> tuple[MeshFile | None, bool]:
     return MeshFile(names, tuple(group_meshes(vertices, faces, blocks)), frame, len(indices)), True
 
 
-def _stl_triangles(path: Path):
-    """Vertices, faces, block and fixed flag per face, and the header of a marked binary STL; None if unmarked."""
-    with open(path, "rb") as file:
-        header = file.read(80)
-        count = int.from_bytes(file.read(4), "little")
-        data = file.read()
-    if not header.startswith(HEADER_MARKER):
-        _check_plain_stl(path, header, count, len(data))
-        return None
+# --- STL -------------------------------------------------------------------------
+def _stl_file(path: Path) -> tuple[MeshFile | None, bool]:
+    """The blocks of an STL file: by stored index (:func:`_indexed_file`), one body (plain binary), or
+    (None, False) for ASCII STL, which trimesh reads with one block per ``solid``.
+
+    A marked file (:data:`HEADER_MARKER`) must be exactly as long as its
+    header says.  A plain binary STL is read as well when its reading is
+    unambiguous (:func:`_plain_binary_stl`); an ASCII STL is checked whole and
+    finite (:func:`_check_ascii_stl`).
+    """
+    whole = path.read_bytes()
+    header, count, data = whole[:80], int.from_bytes(whole[80:84], "little"), memoryview(whole)[84:]
+    if header.startswith(HEADER_MARKER):
+        return _indexed_file(path, _marked_stl(path, header, count, data))
+    records = _plain_binary_stl(path, whole, count, data)
+    if records is None:
+        return None, False
+    vertices = records["vertices"].reshape(-1, 3).astype(float)
+    _check_finite_triangles(path, vertices)
+    faces = np.arange(len(vertices)).reshape(-1, 3)
+    return MeshFile((path.name,), tuple(group_meshes(vertices, faces, np.zeros(len(faces), dtype=int)))), False
+
+
+def _marked_stl(path: Path, header: bytes, count: int, data):
+    """Vertices, faces, block and fixed flag per face, and the header of a binary STL with :data:`HEADER_MARKER`."""
     announced = _announced(header)
     if announced is None:
         raise AssemblyError(f"{path} says it holds interlock blocks but not how many ({header[:40]!r})")
@@ -275,26 +345,68 @@ def _stl_triangles(path: Path):
                             f"({count * STL_RECORD.itemsize} bytes), it holds {len(data)} bytes")
     records = np.frombuffer(data, dtype=STL_RECORD)
     vertices = records["vertices"].reshape(-1, 3).astype(float)
+    _check_finite_triangles(path, vertices)
     faces = np.arange(len(vertices)).reshape(-1, 3)
     if announced[1] is None:  # written before frames were stored: the attribute is the block index
         return vertices, faces, records["block"], None, announced
     return vertices, faces, records["block"] & (STL_FIXED_BIT - 1), records["block"] >= STL_FIXED_BIT, announced
 
 
-def _check_plain_stl(path: Path, header: bytes, count: int, size: int) -> None:
-    """A plain STL must be a complete binary file (84 bytes, then 50 per announced triangle) or ASCII text."""
-    if size == count * STL_RECORD.itemsize and count:
-        return  # binary, complete
-    if header.lstrip().lower().startswith(b"solid"):
-        with open(path, "rb") as file:
-            text = file.read()
-        if text.isascii():
-            if not re.search(rb"endsolid\b", text[-200:]):
-                raise AssemblyError(f"{path} is cut short: an ASCII STL ends with 'endsolid', this one does not")
-            return
+def _plain_binary_stl(path: Path, whole: bytes, count: int, data):
+    """The triangle records of a plain binary STL; None for ASCII STL; an error for a file cut short.
+
+    Besides a complete file (84 bytes, then 50 per announced triangle) two
+    variants that exporters write are read, as their reading is unambiguous:
+    fewer than 50 bytes after the last triangle (padding: not a triangle), and
+    a header count of 0 with whole triangles after it (a writer that never
+    filled in the count; text never has the NUL bytes of a 0 count).  More
+    bytes than announced, by a triangle or more, could be triangles the count
+    misses: refused, as is a file shorter than announced.
+    """
+    size, record = len(data), STL_RECORD.itemsize
+    if count and 0 <= size - count * record < record:
+        return np.frombuffer(data, dtype=STL_RECORD, count=count)
+    if not count and size and not size % record:
+        return np.frombuffer(data, dtype=STL_RECORD)
+    if whole[:80].lstrip().lower().startswith(b"solid") and _check_ascii_stl(path, whole):
+        return None
     raise AssemblyError(f"{path} is not a complete STL: as a binary STL its header announces {count:,} triangles "
-                        f"({count * STL_RECORD.itemsize:,} bytes after the header), it holds {size:,} bytes; "
+                        f"({count * record:,} bytes after the header), it holds {size:,} bytes; "
                         "it is cut short or damaged (and not ASCII STL either)")
+
+
+def _check_ascii_stl(path: Path, text: bytes) -> bool:
+    """Whether ``text`` is an ASCII STL; an error if it is one cut short or with coordinates that are not finite.
+
+    ASCII STL is read as UTF-8 text (solid names need not be ASCII) whose
+    keywords may be in any case (``SOLID``, ``ENDSOLID``, as trimesh reads
+    them); its last line starts with ``endsolid``, and only blank lines,
+    spaces and NUL or end-of-file (Ctrl-Z) bytes may follow it.
+    """
+    body = text.rstrip(b" \t\r\n\0\x1a")
+    try:
+        body.decode("utf-8")
+    except UnicodeDecodeError:
+        return False
+    if not body[body.rfind(b"\n") + 1:].lstrip().lower().startswith(b"endsolid"):
+        raise AssemblyError(f"{path} is cut short: an ASCII STL ends with 'endsolid', this one does not")
+    lower = body.lower()
+    bad = _NOT_FINITE_VERTEX.search(body) if b"nan" in lower or b"inf" in lower else None
+    if bad is not None:
+        number = body.count(b"\n", 0, bad.start()) + 1
+        end = body.find(b"\n", bad.start())
+        line = body[bad.start():end if end >= 0 else None].decode().strip()
+        raise AssemblyError(f"{path} line {number}: a vertex coordinate is not a finite number: {line[:60]!r}")
+    return True
+
+
+def _check_finite_triangles(path: Path, vertices: np.ndarray) -> None:
+    """An error naming the first triangle of a binary STL with a coordinate that is NaN or infinite."""
+    bad = np.flatnonzero(~np.isfinite(vertices).all(axis=1))
+    if bad.size:
+        k = int(bad[0]) // 3
+        raise AssemblyError(f"{path} triangle {k + 1}: a vertex coordinate is not a finite number: "
+                            f"{vertices[bad[0]].tolist()}")
 
 
 def _ply_triangles(path: Path):
@@ -344,8 +456,10 @@ def _scene_file(path: Path) -> tuple[MeshFile, bool]:
     """One block per scene node (GLB, 3MF; also plain STL, PLY, ...), node transform applied, named by the node.
 
     Nodes sort by name (digits as numbers); a name ending in :data:`FIXED_WORD` puts its block in the frame.
+    glTF (:data:`GLTF_SUFFIXES`) is +Y up: its nodes are turned +Z up by :data:`GLTF_TO_Z_UP`.
     """
     scene = trimesh.load_scene(path)
+    up = GLTF_TO_Z_UP if path.suffix.lower() in GLTF_SUFFIXES else np.eye(4)
     nodes = []
     for node in scene.graph.nodes_geometry:
         transform, geometry = scene.graph[node]
@@ -356,6 +470,7 @@ def _scene_file(path: Path) -> tuple[MeshFile, bool]:
         nodes.sort(key=lambda node: _natural_key(node[0]))
     placed = []
     for _, _, transform, mesh in nodes:
+        transform = up @ transform  # exact: the rows of ``transform`` permuted, one negated
         vertices = trimesh.transform_points(mesh.vertices, transform)
         faces = mesh.faces[:, ::-1] if np.linalg.det(transform[:3, :3]) < 0 else mesh.faces  # a reflection
         placed.append((vertices, faces))
@@ -383,7 +498,7 @@ def _scene_header(path: Path, scene) -> tuple | None:
 # --- OBJ -------------------------------------------------------------------------
 @dataclass(frozen=True)
 class _Obj:
-    """The contents of an OBJ file: vertices, polygons (corners face after face), objects and vertex runs."""
+    """The contents of an OBJ file: vertices, polygons (corners face after face), objects, groups, vertex runs."""
 
     vertices: np.ndarray
     corners: np.ndarray
@@ -392,32 +507,48 @@ class _Obj:
     object_names: tuple[str, ...]
     vertex_run: np.ndarray
     announced: tuple | None
+    polygon_group: np.ndarray
+    group_names: tuple[str, ...]
 
 
 def _obj_file(path: Path) -> tuple[MeshFile, bool]:
-    """The blocks of an OBJ file: its objects, else its bodies by shared vertex indices, else by ``v`` runs.
+    """The blocks of an OBJ file: its objects, else its groups, else its bodies by shared vertex indices, else by
+    ``v`` runs.
 
     Polygons are triangulated inside their outline
-    (:func:`~interlock.blocks.repair.triangulate_polygons`).  A file of one
-    object whose faces fall into several sets that share no vertex index
-    (Rhino's export of a selection) gives one block per set when each set is
-    a closed surface (T-junctions allowed); else the same with the runs of
-    ``v`` lines each followed by its faces (:func:`_separate`); else one body.
+    (:func:`~interlock.blocks.repair.triangulate_polygons`).  A file without
+    ``o`` objects whose ``g`` groups are each a closed surface (Rhino, 3ds Max,
+    Maya: one group per object, often over one pool of welded vertices) gives
+    one block per group, like objects.  A file of one object whose faces fall
+    into several sets that share no vertex index (Rhino's export of a
+    selection) gives one block per set when each set is a closed surface
+    (T-junctions allowed); else the same with the runs of ``v`` lines each
+    followed by its faces (:func:`_separate`); else one body, which is split
+    into its bodies across edges of two triangles (:func:`_splitgroup_meshes`).
+    Sets of faces whose bodies touch at welded vertices are split the same way
+    (:func:`_welded_bodies`); bodies that cannot be split into closed surfaces are an error.
     """
     obj = _parse_obj(path)
     faces, polygon = triangulate_polygons(obj.vertices, obj.corners, obj.counts)
+    if not len(faces):
+        raise AssemblyError(f"{path} holds no faces ('f' lines), only {len(obj.vertices)} vertices: no block to "
+                            "read; a block is a closed surface of faces")
     blocks, _, triangles = obj.announced or (None, None, None)
-    face_object = obj.polygon_object[polygon]
+    face_object, object_names = obj.polygon_object[polygon], obj.object_names
+    if len(object_names) == 1 and _closed_groups_apart(obj.vertices, faces, obj.polygon_group[polygon]):
+        face_object, object_names = obj.polygon_group[polygon], obj.group_names
     objects = np.unique(face_object)
     if triangles is not None and triangles != len(faces):
         raise AssemblyError(f"{path} is cut short or damaged: it announces {blocks} blocks of {triangles} "
                             f"triangles in all, it holds {len(objects)} objects of {len(faces)} triangles")
-    names, fixed = zip(*(_flagged_name(obj.object_names[k]) for k in objects.tolist())) if len(objects) else ((), ())
+    names, fixed = zip(*(_flagged_name(object_names[k]) for k in objects.tolist()))
     if len(objects) > 1:  # one block per object, in file order
         meshes = group_meshes(obj.vertices, faces, np.searchsorted(objects, face_object))
         return MeshFile(names, tuple(meshes), _named_frame(path, fixed, obj.announced), blocks), True
     closed, separated = _separate(obj.vertices, faces, obj.vertex_run)
     frame = _named_frame(path, fixed, obj.announced)
+    if closed is not None:
+        closed = _welded_bodies(path, *closed)
     if closed is None:
         mesh = group_meshes(obj.vertices, faces, np.zeros(len(faces), dtype=int))[0]
         return MeshFile((names[0] if names and names[0] else "body0",), (mesh,), frame, blocks), separated
@@ -435,20 +566,44 @@ def _named_frame(path: Path, fixed, announced) -> tuple[int, ...] | None:
     return frame if frame or announced is not None else None
 
 
+def _closed_groups_apart(vertices, faces, face_group) -> bool:
+    """Whether the faces fall into several groups (OBJ ``g``) that are each a closed surface."""
+    groups = np.unique(face_group, return_inverse=True)[1].ravel()
+    return groups.max(initial=0) > 0 and closed_groups(vertices, faces, groups) is not None
+
+
+def _welded_bodies(path: Path, vertices, faces, face_group) -> tuple:
+    """Closed groups of faces, each split into its bodies: faces connected across edges of exactly two faces.
+
+    A group of blocks that touch at welded (shared) vertices is closed (every
+    edge has its opposite) but falls apart across the edges that more than
+    two faces share; each piece must be closed, or the blocks cannot be told
+    apart (an :class:`AssemblyError`).  Groups of one body come back as they are.
+    """
+    adjacency = trimesh.Trimesh(vertices, faces, process=False).face_adjacency
+    body = trimesh.graph.connected_component_labels(adjacency, node_count=len(faces))
+    if len(np.unique(body)) == len(np.unique(face_group)):
+        return vertices, faces, face_group
+    apart = closed_groups(vertices, faces, body)
+    if apart is None:
+        raise AssemblyError(_touching(path))
+    return apart
+
+
 def _separate(vertices, faces, vertex_run) -> tuple[tuple | None, bool]:
     """The blocks of one OBJ object: faces grouped by shared vertex indices, else by ``v`` runs.
 
     A grouping counts when it has several groups and each is a closed
     surface (:func:`~interlock.blocks.repair.closed_groups`).  Returns ``((vertices, faces, face groups),
-    True)``, T-junctions split; or ``(None, True)`` when all faces share
-    vertex indices (one body); or ``(None, False)`` when neither grouping holds.
+    True)``, T-junctions split; or ``(None, False)`` when all faces share
+    vertex indices (one body, to be split into bodies by edges) or neither grouping holds.
     """
     graph = coo_matrix((np.ones(2 * len(faces)), (faces[:, [0, 1]].ravel(), faces[:, [1, 2]].ravel())),
                        shape=(len(vertices), len(vertices)))
     component = connected_components(graph, directed=False)[1]
     by_index = np.unique(component[faces[:, 0]], return_inverse=True)[1].ravel()
     if by_index.max(initial=0) == 0:
-        return None, True
+        return None, False
     closed = closed_groups(vertices, faces, by_index)
     if closed is None and (vertex_run[faces] == vertex_run[faces[:, :1]]).all():
         by_run = np.unique(vertex_run[faces[:, 0]], return_inverse=True)[1].ravel()
@@ -457,9 +612,10 @@ def _separate(vertices, faces, vertex_run) -> tuple[tuple | None, bool]:
 
 
 def _parse_obj(path: Path) -> _Obj:
-    """Vertices, polygons, objects and ``v`` runs of an OBJ file (``vt``, ``vn``, groups and materials ignored).
+    """Vertices, polygons, objects, groups and ``v`` runs of an OBJ file (``vt``, ``vn``, materials ignored).
 
-    A run of ``v`` lines starts at a ``v`` line that follows an ``f`` line.
+    Each ``o`` line starts an object, each ``g`` line a group (named by the
+    rest of the line).  A run of ``v`` lines starts at a ``v`` line that follows an ``f`` line.
     Negative indices count back from the last vertex so far.  A malformed
     last line is dropped (a file cut short); elsewhere it is an error.
     """
@@ -470,7 +626,7 @@ def _parse_obj(path: Path) -> _Obj:
     if announced is None and any(line.startswith(OBJ_SECOND_LINE) for line in lines[:20]):
         raise AssemblyError(f"{path} was written by interlock but its header ('# interlock blocks=N ...') is "
                             "damaged, so it cannot tell whether it is whole; export it again")
-    rows, polygons, seen, objects, runs, names = [], [], [], [], [], [""]
+    rows, polygons, seen, objects, runs, names, groups, group_names = [], [], [], [], [], [""], [], [""]
     run, after_face = 0, False
     last = max((k for k, line in enumerate(lines) if line.strip()), default=-1)
     for number, line in enumerate(lines):
@@ -496,9 +652,12 @@ def _parse_obj(path: Path) -> _Obj:
                 polygons.append(corners)
                 seen.append(len(rows))
                 objects.append(len(names) - 1)
+                groups.append(len(group_names) - 1)
                 after_face = True
             elif tag == "o":
                 names.append(line.strip()[1:].strip())
+            elif tag == "g":
+                group_names.append(line.strip()[1:].strip())
         except ValueError as error:
             if number == last:  # the file ends in the middle of this line
                 break
@@ -513,4 +672,4 @@ def _parse_obj(path: Path) -> _Obj:
         raise AssemblyError(f"{path} has faces with vertex indices outside 1..{len(vertices)} "
                             f"(e.g. {corners[bad][0] + 1}); the file is cut short or damaged")
     return _Obj(vertices, corners, counts, np.array(objects, dtype=np.int64), tuple(names),
-                np.array(runs, dtype=np.int64), announced)
+                np.array(runs, dtype=np.int64), announced, np.array(groups, dtype=np.int64), tuple(group_names))

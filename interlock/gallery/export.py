@@ -17,8 +17,8 @@ from trimesh.visual.material import PBRMaterial
 from interlock.blocks.assembly import Assembly
 from interlock.blocks.compas import write_compas
 from interlock.blocks.rhino import write_3dm
-from interlock.blocks.meshfiles import (BLOCK_DATA, FIXED_DATA, FIXED_WORD, OBJ_SECOND_LINE, STL_FIXED_BIT,
-                                       STL_MAX_FRAMED, STL_RECORD, file_header)
+from interlock.blocks.meshfiles import (BLOCK_DATA, FIXED_DATA, FIXED_WORD, GLTF_TO_Z_UP, OBJ_SECOND_LINE,
+                                       STL_FIXED_BIT, STL_MAX_FRAMED, STL_RECORD, file_header)
 from interlock.errors import GalleryError
 from interlock.files import atomic_write, unwritable, write_atomically
 from interlock.gallery import appearance
@@ -33,8 +33,9 @@ FORMATS = {
             "'# interlock blocks=N fixed=K triangles=T'; class colours in a .mtl file beside it",
     ".ply": "binary PLY; one mesh, per-face 'block' index, 'fixed' flag and class colour; "
             "'comment interlock blocks=N fixed=K'",
-    ".glb": "binary glTF; one node per block, 'block_0007' or 'block_0007 fixed', one mesh per block type and "
-            "class, class colours; 'interlock blocks=N fixed=K' in the scene extras",
+    ".glb": "binary glTF, +Y up as glTF says (interlock's z is glTF's y); one node per block, 'block_0007' or "
+            "'block_0007 fixed', one mesh per block type and class, class colours; 'interlock blocks=N fixed=K' "
+            "in the scene extras",
     ".3mf": "3MF; one build item per block (part number 'block_0007' or 'block_0007 fixed'), one object per block "
             "type and class, class colours; 'interlock blocks=N fixed=K' in the model metadata",
     ".vtu": "VTK unstructured grid; triangles with cell data block, class, mirrored, fixed",
@@ -63,6 +64,10 @@ def export(obj, path, exploded=0.0, progress=None) -> Path:
     :meth:`Assembly.load <interlock.blocks.Assembly.load>` reads each one
     back into the same blocks with the same frame.  Formats with colour
     colour the blocks by :func:`~interlock.gallery.appearance.block_classes`.
+    GLB is written +Y up, as glTF specifies, so that viewers show interlock's
+    +Z up as up: each node is placed by the inverse of
+    :data:`~interlock.blocks.meshfiles.GLTF_TO_Z_UP`, which reading applies,
+    so the coordinates read back are the same to the last bit.
 
     Parameters
     ----------
@@ -297,6 +302,7 @@ def _write_ply(assembly: Assembly, path: Path):
 
 def _write_glb(assembly: Assembly, path: Path):
     meshes, colours, part_of, placements = _parts(assembly)
+    placements = GLTF_TO_Z_UP.T @ placements  # +Z up to glTF's +Y up; exact, read back by GLTF_TO_Z_UP
     scene = trimesh.Scene()
     for k, (mesh, rgba) in enumerate(zip(meshes, colours)):
         part = trimesh.Trimesh(mesh.vertices, mesh.faces, process=False)

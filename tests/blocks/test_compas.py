@@ -7,7 +7,8 @@ import pytest
 import trimesh
 
 from interlock.blocks import Assembly, load_compas
-from interlock.blocks.compas import COMPAS_DTYPES, UPSTREAM_SUPPORTS, write_compas
+from interlock.blocks.compas import (COMPAS_DTYPES, UPSTREAM_FINGERPRINTS, UPSTREAM_SUPPORTS, fingerprint,
+                                     write_compas)
 from interlock.errors import InterlockError
 
 
@@ -25,14 +26,18 @@ def _polygon_volume(path) -> float:
     return abs(total)
 
 
-def _write(tmp_path, meshes, support=(), name="model.json", drop_face=False):
+def _write(tmp_path, meshes, support=(), name="model.json", drop_face=False, keys=None, labels=None):
+    """A COMPAS file of ``meshes``, keyed by ``keys`` (default 0, 1, ...); ``support`` and ``labels`` by key."""
     nodes = {}
-    for k, mesh in enumerate(meshes):
+    for k, (key, mesh) in enumerate(zip(keys or range(len(meshes)), meshes)):
         faces = mesh.faces.tolist()[1:] if drop_face and k == 0 else mesh.faces.tolist()
         vertex = {str(n): dict(zip("xyz", p)) for n, p in enumerate(mesh.vertices.tolist())}
-        nodes[str(k)] = {"block": {"dtype": "compas_assembly.datastructures/Block",
-                                   "data": {"vertex": vertex, "face": {str(f): face for f, face in enumerate(faces)}}},
-                         "is_support": k in support}
+        face = {str(f): face for f, face in enumerate(faces)}
+        nodes[str(key)] = {"block": {"dtype": "compas_assembly.datastructures/Block",
+                                     "data": {"vertex": vertex, "face": face}},
+                           "is_support": key in support}
+        if labels is not None and key in labels:
+            nodes[str(key)]["label"] = labels[key]
     path = tmp_path / name
     path.write_text(json.dumps({"dtype": COMPAS_DTYPES[0], "data": {"graph": {"data": {"node": nodes}}}}))
     return path
@@ -58,6 +63,48 @@ def test_sample_files_blocks_volumes_and_upstream_supports(reference_data, stem,
     assert assembly.info["supports_from"] == "upstream examples"
     assert np.all(assembly.volumes > 0)
     assert assembly.volumes.sum() == pytest.approx(_polygon_volume(path), rel=rtol)
+
+
+@pytest.mark.parametrize("stem", sorted(UPSTREAM_SUPPORTS))
+def test_every_upstream_example_is_recognised_by_its_blocks(reference_data, tmp_path, stem):
+    path = reference_data / "compas_cra" / f"{stem}.json"
+    if not path.is_file():
+        pytest.skip(f"{stem}.json is not among the reference files of tests/data/compas_cra")
+    copy = tmp_path / "my-own-name.json"  # the example under another name is still the example
+    copy.write_bytes(path.read_bytes())
+    for loaded in (load_compas(path), load_compas(copy)):
+        assert loaded.frame == tuple(sorted(UPSTREAM_SUPPORTS[stem]))
+        assert loaded.info["supports_from"] == "upstream examples" and loaded.info["upstream_example"] == stem
+        blocks = [loaded.mesh(i) for i in range(len(loaded))]
+        assert fingerprint(loaded.labels, blocks) == UPSTREAM_FINGERPRINTS[stem][1]
+
+
+def test_fingerprints_cover_the_upstream_supports_and_differ():
+    assert set(UPSTREAM_FINGERPRINTS) == set(UPSTREAM_SUPPORTS)
+    assert len({digest for _, digest in UPSTREAM_FINGERPRINTS.values()}) == len(UPSTREAM_FINGERPRINTS)
+
+
+@pytest.mark.parametrize("name", ["bridge.json", "shelf.json", "cubes.json", "type-a.json", "armadillo.json"])
+def test_user_file_named_like_an_example_gets_no_upstream_supports(tmp_path, name):
+    # three unmarked boxes (as many nodes as cubes.json and type-a.json): not those examples
+    path = _write(tmp_path, _stack(3), name=name)
+    assembly = load_compas(path)
+    assert assembly.frame == () and assembly.info["supports_from"] == "none"
+    assert "upstream_example" not in assembly.info
+
+
+def test_moved_or_rekeyed_example_is_not_the_example(reference_data, tmp_path):
+    document = json.loads((reference_data / "compas_cra" / "bridge.json").read_text())
+    graph = document["data"]["graph"]["data"]
+    rekeyed = dict(document, data=dict(document["data"], graph={"data": dict(
+        graph, node={str(int(k) * 10 + 100): v for k, v in graph["node"].items()}, edge={}, adjacency={})}))
+    (tmp_path / "rekeyed").mkdir()
+    (tmp_path / "rekeyed" / "bridge.json").write_text(json.dumps(rekeyed))
+    vertex = next(iter(graph["node"]["5"]["block"]["data"]["vertex"].values()))
+    vertex["z"] += 1e-3  # one vertex of one block moved by a millimetre
+    (tmp_path / "bridge.json").write_text(json.dumps(document))
+    for path in (tmp_path / "rekeyed" / "bridge.json", tmp_path / "bridge.json"):
+        assert load_compas(path).frame == () and load_compas(path).info["supports_from"] == "none"
 
 
 def test_armadillo_first_course_is_33_supports():
@@ -140,7 +187,7 @@ def generated():
 def test_write_compas_round_trips_through_load_compas(tmp_path, generated, name):
     assembly = generated[name]
     back = load_compas(write_compas(assembly, tmp_path / f"{name}.json"))
-    assert len(back) == len(assembly) and back.labels == tuple(range(len(assembly)))
+    assert len(back) == len(assembly) and back.labels == tuple(str(label) for label in assembly.labels)
     np.testing.assert_allclose(back.volumes, assembly.volumes, rtol=1e-12)
     np.testing.assert_allclose(back.centroids, assembly.centroids, rtol=0, atol=1e-12 * assembly.scale)
     assert back.frame == assembly.frame and back.info["supports_from"] == "file"
@@ -208,3 +255,43 @@ def test_write_compas_errors(tmp_path):
     path = write_compas(Assembly.from_meshes(_stack(1)), tmp_path / "one.json")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["one.json"]  # no temporary file left
     assert len(load_compas(path)) == 1
+
+
+# --- labels and node keys ------------------------------------------------------------------------
+
+def test_labels_written_come_back(tmp_path):
+    named = Assembly.from_meshes(_stack(3), frame=[0], labels=["named.obj:base", "named.obj:keystone", "top"])
+    path = write_compas(named, tmp_path / "named.json")
+    back = load_compas(path)
+    assert back.labels == ("named.obj:base", "named.obj:keystone", "top") and back.frame == (0,)
+    assert back.info["node_keys"] == [0, 1, 2]
+    assert load_compas(write_compas(back, tmp_path / "again.json")).labels == back.labels
+
+
+def test_label_texts_of_a_foreign_file_are_labels_and_supports_stay_node_keys(tmp_path):
+    path = _write(tmp_path, _stack(3), keys=[5, 9, 12], labels={5: "base", 9: "9", 12: "cap"})
+    assembly = load_compas(path, supports=[9])
+    assert assembly.labels == ("base", 9, "cap")  # a label that is its key's text stays the key
+    assert assembly.frame == (1,) and assembly.info["node_keys"] == [5, 9, 12]
+    document = json.loads(write_compas(assembly, tmp_path / "copy.json").read_text())
+    assert list(document["data"]["graph"]["data"]["node"]) == ["5", "9", "12"]
+
+
+def test_node_keys_survive_json_to_json(tmp_path):
+    keys = [100, 110, 120, 250]
+    original = load_compas(_write(tmp_path, _stack(4), support=(100, 120), keys=keys))
+    assert original.labels == tuple(keys) and original.frame == (0, 2) and "node_keys" not in original.info
+    document = json.loads(write_compas(original, tmp_path / "copy.json").read_text())
+    graph = document["data"]["graph"]["data"]
+    assert list(graph["node"]) == ["100", "110", "120", "250"] and graph["max_node"] == 250
+    assert [node["block"]["data"]["attributes"]["node"] for node in graph["node"].values()] == keys
+    back = load_compas(tmp_path / "copy.json")
+    assert back.labels == tuple(keys) and back.frame == (0, 2)
+    np.testing.assert_array_equal(back.volumes, original.volumes)
+
+
+def test_labels_that_are_not_node_keys_give_index_keys(tmp_path):
+    for labels in (["a", "b"], [3, 3], [-1, 4], [True, False]):
+        document = json.loads(write_compas(Assembly.from_meshes(_stack(2), labels=labels), tmp_path / "x.json")
+                              .read_text())
+        assert list(document["data"]["graph"]["data"]["node"]) == ["0", "1"]

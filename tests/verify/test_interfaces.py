@@ -4,6 +4,7 @@ The CRA paper's Armadillo vault (Table 5: 399 blocks, 1,014 interfaces, stable) 
 approximately; the default contact model of RBE and CRA is the per-pair interface rule.
 """
 
+import json
 import math
 
 import numpy as np
@@ -231,3 +232,16 @@ def test_the_reference_files_overlap_within_the_interface_rule(reference_data):
         assembly = load_compas(path)
         found, model = statics_contacts(assembly)
         assert model["model"] == "interfaces" and len(found) > 0, path.name
+
+
+def test_stored_interfaces_of_a_file_that_names_its_nodes(reference_data, tmp_path):
+    # node labels ("stone_0", ...) become block labels; the stored interfaces still name node keys
+    data = json.loads((reference_data / "compas_cra" / "curve-3-blocks.json").read_text())
+    for key, node in data["data"]["graph"]["data"]["node"].items():
+        node["label"] = f"stone_{key}"
+    path = tmp_path / "named.json"
+    path.write_text(json.dumps(data))
+    assembly = load_compas(path)
+    assert assembly.labels == ("stone_0", "stone_1", "stone_2")
+    stored = compas_interfaces(path, assembly)
+    assert len(stored) == 40 and rbe(assembly, 0.84, contacts=stored).stable is True

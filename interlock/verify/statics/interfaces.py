@@ -304,8 +304,9 @@ def compas_interfaces(path, assembly: Assembly) -> tuple[Contact, ...]:
     ``A_eq`` puts the force on ``v``, its negative on ``u``), so the contact
     is ``(i, j) = (u, v)`` with normal ``zaxis`` when ``u`` comes first, else
     ``(v, u)`` with ``-zaxis`` and the axes swapped.  Blocks are matched by
-    node key (``assembly.labels``, as :func:`~interlock.blocks.assembly.load_compas`
-    sets them).  Vertices are ordered counter-clockwise about the normal;
+    node key: ``assembly.info["node_keys"]`` when the file names its nodes
+    (labels differ from keys), else ``assembly.labels``, as
+    :func:`~interlock.blocks.assembly.load_compas` sets them.  Vertices are ordered counter-clockwise about the normal;
     ``deviation`` is their largest distance from the frame's plane.
 
     Parameters
@@ -335,7 +336,9 @@ def compas_interfaces(path, assembly: Assembly) -> tuple[Contact, ...]:
         edges = graph.get("edge", {})
     except (OSError, ValueError, KeyError, TypeError, AttributeError) as error:
         raise InterfaceError(f"{path} is not a readable COMPAS assembly JSON file ({error})") from None
-    index = {str(label): k for k, label in enumerate(assembly.labels)}
+    keys = assembly.info.get("node_keys") if isinstance(assembly.info, dict) else None
+    keys = keys if isinstance(keys, (list, tuple)) and len(keys) == len(assembly) else assembly.labels
+    index = {str(key): k for k, key in enumerate(keys)}  # node keys (labels when a file names its nodes)
     found = []
     for u, neighbours in edges.items():
         for v, attributes in (neighbours or {}).items():
