@@ -4,10 +4,11 @@ Rows of ``A`` are constraints ``a_i . x >= 0`` on a motion ``x``; a stress is
 ``w >= 0`` with ``A^T w = 0``.  Every stress vanishes outside one largest
 support, and on that support the constraints are *forced*: a motion keeping
 all of them satisfies them with equality (Farkas).  The second-order test
-(Connelly-Whiteley prestress stability, main paper Sec. 5) and the periodic
-facial reduction (main paper Sec. 4) both need that support.
+(:mod:`~interlock.verify.second_order`, prestress stability) and the
+periodic facial reduction (:mod:`~interlock.verify.periodic`, main paper
+Sec. 4.1) both need that support.
 
-LP (Tardos-style support maximisation): ``max sum y`` over ``(w, y)`` with
+LP (support maximisation): ``max sum y`` over ``(w, y)`` with
 ``U^T w = 0``, ``0 <= y <= 1``, ``y <= w``, ``w >= 0``.  By homogeneity the
 optimum has ``y_i = 1`` exactly on the largest support.  ``U`` is an
 orthonormal basis of ``A``'s column space (rank by ``rtol``), so

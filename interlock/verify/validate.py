@@ -25,7 +25,7 @@ class OverlapError(InterlockError):
 
 @dataclass(frozen=True)
 class Overlap:
-    """The common volume of two blocks ``i < j``.
+    """The common volume of two neighbouring blocks ``i`` and ``j``.
 
     ``thickness = 2 volume / area`` (``area``: the surface of the common solid) is its mean depth: ``d`` for
     a thin slab of depth ``d`` between parallel faces, about a third of the depth for a block's edge pressed
@@ -93,7 +93,7 @@ def overlaps_without_contact(found, contacts, distance: float) -> list[Overlap]:
     block, and a wrong "not interlocked" before this check).
     """
     touching = {(min(c.i, c.j), max(c.i, c.j)) for c in contacts}
-    return [o for o in found if o.thickness > distance and (o.i, o.j) not in touching]
+    return [o for o in found if o.thickness > distance and (min(o.i, o.j), max(o.i, o.j)) not in touching]
 
 
 def self_intersections(mesh, rtol: float = CROSSING_RTOL) -> np.ndarray:
