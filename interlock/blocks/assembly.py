@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import warnings
 from collections.abc import Sequence
 from functools import cached_property
 from pathlib import Path
@@ -520,10 +521,14 @@ def _checked_meshes(meshes, names) -> tuple[trimesh.Trimesh, ...]:
             faces[k] = own
             meshes[k] = trimesh.Trimesh(meshes[k].vertices, own - offsets[k], process=False)
     for k in np.flatnonzero(_signed_volumes(vertices, faces, offsets) <= 0).tolist():
-        if meshes[k].volume < 0:
+        with warnings.catch_warnings(), np.errstate(all="ignore"):  # trimesh divides by a flat mesh's volume 0
+            warnings.simplefilter("ignore")
+            volume = meshes[k].volume
+        if volume < 0:
             meshes[k] = meshes[k].copy()
             meshes[k].invert()
-        if not meshes[k].volume > 0:
+            volume = -volume
+        if not volume > 0:
             raise AssemblyError(f"{names[k]} encloses no volume")
     return tuple(meshes)
 

@@ -53,9 +53,6 @@ GLTF_TO_Z_UP = np.array([[1.0, 0, 0, 0], [0, 0, -1, 0], [0, 1, 0, 0], [0, 0, 0, 
 GLTF_SUFFIXES = (".glb", ".gltf")
 # The formats read by meshio (:func:`_meshio_triangles`).
 _MESHIO_SUFFIXES = (".vtu", ".xdmf")
-# A mesh whose signed volume is below this fraction of its unsigned one is flat: trimesh may divide by its
-# volume 0 (a warning).  Loose on purpose: it only picks the meshes whose volume is computed with warnings off.
-_FLAT_RTOL = 1e-9
 # an ASCII STL vertex line with a coordinate NaN or infinite (as Python and trimesh parse them)
 _NOT_FINITE_VERTEX = re.compile(rb"(?im)^[ \t]*vertex[ \t][^\n]*?(?<![\w.])[-+]?(?:nan|inf(?:inity)?)\b")
 _HEADER = re.compile(re.escape(HEADER_MARKER.decode()) + r"(\d+)(?: fixed=(\d+))?(?: triangles=(\d+))?")
@@ -150,8 +147,6 @@ def read_mesh_file(path, split: bool = True) -> MeshFile:
     with warnings.catch_warnings(), np.errstate(all="ignore"):
         warnings.simplefilter("ignore")
         found = _read(path, reader, split)
-        for k in _flat(found.meshes):  # trimesh warns when it divides by their volume 0: here, silenced (cached)
-            found.meshes[k].mass_properties
     return found
 
 
@@ -195,18 +190,6 @@ def _mesh_path(path) -> Path:
     if path.stat().st_size == 0 and path.suffix.lower() not in _MESHIO_SUFFIXES:  # meshio's reader says so itself
         raise AssemblyError(f"{path} is empty (0 bytes): it holds no mesh")
     return path
-
-
-def _flat(meshes) -> list[int]:
-    """The meshes that enclose (nearly) no volume: their triangles' triple products cancel out."""
-    if not meshes:
-        return []
-    face_mesh = np.repeat(np.arange(len(meshes)), [len(m.faces) for m in meshes])
-    corners = np.vstack([m.vertices[m.faces] - m.vertices.mean(axis=0) for m in meshes])
-    triple = np.einsum("ij,ij->i", corners[:, 0], np.cross(corners[:, 1], corners[:, 2]))
-    total = np.bincount(face_mesh, triple, minlength=len(meshes))
-    scale = np.bincount(face_mesh, np.abs(triple), minlength=len(meshes))
-    return np.flatnonzero(~(np.abs(total) > _FLAT_RTOL * scale)).tolist()
 
 
 def readgroup_meshes(path, split: bool = True) -> list[tuple[str, trimesh.Trimesh]]:
