@@ -55,6 +55,22 @@ def test_tresca_leans_on_eta_when_the_thresholds_cannot_hold_the_load():
     assert held is not None and held.eta_active == 0
 
 
+def test_tresca_vertex_with_threshold_zero_has_no_friction_and_the_others_hold_the_load():
+    # Thresholds 0.2 at two corners, 0 at the other two (no friction unknowns or cone there): tilted by 10
+    # degrees the two corners hold the cube (0.4 > tan 10 of the load), and the frictionless ones carry none.
+    problem, b_eq = _problem(_stack(), 0.5, tilted_gravity("x", 10))
+    solved = cra_coulomb.tresca(problem, b_eq, np.array([0.2, 0.0, 0.2, 0.0]), 0.25)
+    assert solved is not None and solved.eta_active == 0
+    assert np.all(solved.forces[[1, 3], 1:] == 0.0) and np.abs(solved.forces[[0, 2], 1:]).max() > 1e-3
+    assert problem.system.a_eq @ solved.forces.ravel() == pytest.approx(b_eq, abs=1e-7)  # Eq. (7b)
+
+
+def test_thresholds_below_the_floor_are_zero():
+    floored = cra_coulomb._floored(np.array([-1.0, 0.0, 1e-7, 2e-6, 1.0]))
+    assert floored.tolist() == [0.0, 0.0, 0.0, 2e-6, 1.0]  # THRESHOLD_RTOL = 1e-6 of the largest
+    assert cra_coulomb._floored(np.zeros(3)).tolist() == [0.0, 0.0, 0.0]
+
+
 @pytest.mark.parametrize("angle", [0.0, 10.0, 20.0, 26.0])
 def test_fixed_point_proves_a_cube_on_a_slope_stable(angle):
     # friction angle of mu = 0.5: 26.57 degrees; the exact LP accepts the motion, which slides down the slope

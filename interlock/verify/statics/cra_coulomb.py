@@ -66,8 +66,9 @@ from scipy.optimize import Bounds, LinearConstraint, milp
 
 from interlock.verify.statics.equilibrium import clarabel_lp, clarabel_solve
 
-__all__ = ["COULOMB_ITERATIONS", "COULOMB_DAMPING", "COULOMB_MEMORY", "THRESHOLD_RTOL", "SHUT_TOL", "SHUT_RESIDUAL", "TrescaSolution",
-           "FixedPoint", "tresca", "coulomb_fixed_point", "shut_nearly_closed", "unbalanced", "describe"]
+__all__ = ["COULOMB_ITERATIONS", "COULOMB_DAMPING", "COULOMB_MEMORY", "THRESHOLD_RTOL", "SHUT_TOL", "SHUT_RESIDUAL",
+           "TrescaSolution", "FixedPoint", "tresca", "coulomb_fixed_point", "shut_nearly_closed", "unbalanced",
+           "describe"]
 
 #: Most rounds of the fixed point (shelf-stable is accepted after 15).
 COULOMB_ITERATIONS = 40
