@@ -593,6 +593,7 @@ def _run_convert(args) -> int:
     from pathlib import Path
 
     from interlock.gallery import export
+    from interlock.gallery.export import LABELLED_FORMATS
 
     if Path(args.target).suffix.lower() not in OUTPUT_SUFFIXES:
         raise InterlockError(f"cannot write {args.target}: choose a suffix from {', '.join(OUTPUT_SUFFIXES)}")
@@ -604,7 +605,10 @@ def _run_convert(args) -> int:
         assembly = _load(args.source, args.fixed, progress=_bar_progress(bar))
     with tqdm(desc=f"convert: writing {Path(args.target).name}", unit="block", disable=None, leave=False) as bar:
         path = export(assembly, args.target, progress=_bar_progress(bar))
-    print(f"wrote {path}: {len(assembly)} blocks, frame {_frame_text(assembly.frame, assembly.info.get('frame_from'))}")
+    kept = "" if path.suffix.lower() in LABELLED_FORMATS else (
+        f"; labels not kept ({path.suffix} stores none: use {', '.join(LABELLED_FORMATS)})")
+    print(f"wrote {path}: {len(assembly)} blocks, frame {_frame_text(assembly.frame, assembly.info.get('frame_from'))}"
+          f"{kept}")
     return 0
 
 

@@ -59,3 +59,15 @@ def test_slow_formats_report_progress_per_block(hexagon_file, tmp_path, suffix):
     Assembly.load(path, progress=lambda done, total: read.append((done, total)))
     assert written == [(k, len(hexagon)) for k in range(len(hexagon))]
     assert read == [(k, len(hexagon)) for k in range(len(hexagon))]
+
+
+def test_labels_survive_every_labelled_format_and_the_others_say_they_drop_them(hexagon_file, tmp_path, capsys):
+    hexagon, _ = hexagon_file
+    source = export(hexagon, tmp_path / "hexagon.json")  # lozenge labels
+    chain = [source] + [tmp_path / f"step{k}{suffix}" for k, suffix in enumerate((".obj", ".glb", ".3mf", ".3dm"))]
+    for there, back in zip(chain, chain[1:] + [tmp_path / "last.json"]):
+        assert main(["convert", str(there), str(back)]) == 0
+        assert "labels not kept" not in capsys.readouterr().out
+    assert Assembly.load(tmp_path / "last.json").labels == hexagon.labels
+    assert main(["convert", str(source), str(tmp_path / "flat.stl")]) == 0
+    assert "labels not kept (.stl stores none: use .obj, .glb, .3mf, .3dm, .json)" in capsys.readouterr().out

@@ -14,6 +14,7 @@ import shapely
 import trimesh
 
 from interlock.blocks.compas import read_compas
+from interlock.blocks.info import restored
 from interlock.blocks.meshfiles import BLOCK_DATA, HEADER_MARKER, STL_RECORD, read_mesh_file
 from interlock.blocks.repair import TJUNCTION_RTOL, split_t_junctions, unmatched_edges
 from interlock.blocks.rhino import FRAME_LAYER, read_3dm_blocks
@@ -144,7 +145,10 @@ class Assembly:
         Assembly
             ``info["source"]`` lists the files; ``info["frame_from"]`` says where
             the frame came from: ``"argument"``, ``"file"`` or ``"none"`` (for
-            COMPAS JSON also ``"upstream examples"``).
+            COMPAS JSON also ``"upstream examples"``).  Labels are those the file
+            stores (``.3dm``, COMPAS JSON and the OBJ, GLB and 3MF files of
+            :func:`~interlock.gallery.export.export`, with their ``info``), else
+            ``"<file name>:<object name>"`` (for a list of files, the file names).
 
         Raises
         ------
@@ -174,8 +178,8 @@ class Assembly:
         if isinstance(paths, (str, Path)):
             path = Path(paths)
             found = read_mesh_file(path)
-            labels = [f"{path.name}:{name}" for name in found.names]
-            stored, sources = found.frame, [str(path)]
+            labels = [found.labels.get(name, f"{path.name}:{name}") for name in found.names]
+            stored, sources, kept = found.frame, [str(path)], restored(found.info or {})
             meshes = found.meshes
         else:
             paths = [Path(p) for p in paths]
@@ -183,13 +187,13 @@ class Assembly:
                 raise AssemblyError("no mesh files given; pass one path or a list of paths")
             files = [read_mesh_file(p, split=False) for p in paths]
             meshes = [trimesh.util.concatenate(list(f.meshes)) if len(f.meshes) > 1 else f.meshes[0] for f in files]
-            labels, sources = [p.name for p in paths], [str(p) for p in paths]
+            labels, sources, kept = [p.name for p in paths], [str(p) for p in paths], {}
             marked = [f.frame is not None for f in files]
             stored = tuple(k for k, f in enumerate(files) if f.frame) if any(marked) else None
         frame_from = "argument" if frame is not None else "none" if stored is None else "file"
         chosen = frame if frame is not None else stored or ()
         return cls.from_meshes(meshes, frame=chosen, labels=labels,
-                               info={"source": sources, "frame_from": frame_from})
+                               info={**kept, "source": sources, "frame_from": frame_from})
 
     def with_frame(self, frame) -> Assembly:
         """The same blocks with another frame."""

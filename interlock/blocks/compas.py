@@ -12,6 +12,7 @@ import trimesh
 
 from interlock import deprecation
 from interlock.blocks.info import plain, restored
+from interlock.blocks.labels import label_from_text, label_text
 from interlock.errors import AssemblyError
 from interlock.files import unwritable, write_atomically
 
@@ -68,7 +69,8 @@ def read_compas(path, supports=None, progress=None) -> tuple[list[trimesh.Trimes
     meaning of ``supports``; ``frame`` holds block indices (positions in
     increasing node-key order).  ``labels`` are the node keys, except that a
     node with a ``label`` text (as :func:`write_compas` writes them) other than
-    its key's text is labelled by that text; then ``info["node_keys"]`` lists
+    its key's text is labelled by that text, rebuilt as a group element, tuple,
+    ... where the node has a ``label_type``; then ``info["node_keys"]`` lists
     the node keys.  Without ``supports`` and ``is_support`` marks, the frame is
     :data:`UPSTREAM_SUPPORTS` if the file is an upstream example (its node count
     and :func:`fingerprint` are in :data:`UPSTREAM_FINGERPRINTS`, whatever the
@@ -176,9 +178,10 @@ def write_compas(assembly, path, progress=None) -> Path:
       coplanar triangles that meet along edges are merged into one polygon face
       (so interfaces come out as whole polygons), vertices written exactly;
     - ``is_support``: whether the block is in the frame;
-    - ``name`` (``block_0007``, by block index), ``label`` (the label as
-      text; :func:`read_compas` returns it as the block's label unless it is
-      the node key's text) and ``x, y, z`` (the block's centroid).
+    - ``name`` (``block_0007``, by block index), ``label`` and ``label_type``
+      (the label as text and its kind, :func:`~interlock.blocks.labels.label_text`;
+      :func:`read_compas` rebuilds the label from them unless the text is the
+      node key's) and ``x, y, z`` (the block's centroid).
 
     ``Assembly.info`` is kept in the assembly attribute :data:`INFO_ATTRIBUTE`
     as a JSON text (numbers, text and lists as such, other values as text; a
@@ -221,9 +224,10 @@ def write_compas(assembly, path, progress=None) -> Path:
             progress(i, len(assembly))
         mesh = assembly.mesh(i)
         x, y, z = (float(c) for c in assembly.centroids[i])
+        kind, text = label_text(assembly.labels[i])
         nodes[str(key)] = {"block": {"dtype": BLOCK_DTYPE, "data": _mesh_data(mesh, i, key),
                                      "guid": str(uuid.uuid5(uuid.NAMESPACE_OID, f"interlock block {i}"))},
-                           "is_support": i in fixed, "name": f"block_{i:04d}", "label": str(assembly.labels[i]),
+                           "is_support": i in fixed, "name": f"block_{i:04d}", "label": text, "label_type": kind,
                            "x": x, "y": y, "z": z}
     graph = {"attributes": {}, "default_node_attributes": _NODE_DEFAULTS,
              "default_edge_attributes": {"interfaces": None}, "node": nodes, "edge": {key: {} for key in nodes},
@@ -367,9 +371,12 @@ def _support_keys(nodes: dict, keys, node_keys, meshes, supports, ours: bool = F
 
 
 def _label(node: dict, node_key):
-    """A node's label: its ``label`` text unless that is missing, empty or its key's text; else the key."""
-    label = node.get("label")
-    return label if isinstance(label, str) and label and label != str(node_key) else node_key
+    """A node's label: its ``label`` text unless that is missing, empty or its key's text, else the key; rebuilt
+    from the text by the node's ``label_type`` where :func:`write_compas` stored one (:mod:`~.labels`)."""
+    label, kind = node.get("label"), node.get("label_type")
+    if not isinstance(label, str) or not label or label == str(node_key):
+        return node_key
+    return label_from_text(kind, label) if isinstance(kind, str) else label
 
 
 def _block_mesh(path: Path, key, node) -> trimesh.Trimesh:

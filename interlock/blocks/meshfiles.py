@@ -4,12 +4,14 @@ from __future__ import annotations
 
 import contextlib
 import io
+import json
 import math
 import os
 import re
 import warnings
 import zipfile
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from xml.etree import ElementTree
 from pathlib import Path
 
 import numpy as np
@@ -19,10 +21,12 @@ from scipy.sparse.csgraph import connected_components
 
 from interlock.blocks.repair import (closed_groups, group_meshes, split_t_junctions, triangulate_polygons,
                                      unmatched_edges)
+from interlock.blocks.labels import label_from_text
 from interlock.errors import AssemblyError
 
 __all__ = ["MeshFile", "read_mesh_file", "file_header", "HEADER_MARKER", "STL_RECORD", "BLOCK_DATA",
-           "FIXED_DATA", "FIXED_WORD", "STL_FIXED_BIT", "STL_MAX_FRAMED", "OBJ_SECOND_LINE", "GLTF_TO_Z_UP",
+           "FIXED_DATA", "FIXED_WORD", "STL_FIXED_BIT", "STL_MAX_FRAMED", "OBJ_SECOND_LINE", "OBJ_LABEL",
+           "OBJ_INFO", "LABELS_KEY", "INFO_KEY", "GLTF_TO_Z_UP",
            "GLTF_SUFFIXES"]
 
 #: How an exported file says that it holds interlock blocks, and how many: the start of a binary STL's
@@ -45,6 +49,13 @@ STL_MAX_FRAMED = STL_FIXED_BIT
 #: How the second line of an OBJ export starts (after its :func:`file_header`): a file with it and without a
 #: readable header is damaged.
 OBJ_SECOND_LINE = "# one object per block, named 'fixed' in the frame"
+#: OBJ comment lines of :func:`~interlock.gallery.export.export`: after an ``o`` line, the block's label as the
+#: JSON pair ``[kind, text]`` of :func:`~interlock.blocks.labels.label_text`; in the header, ``Assembly.info``
+#: as JSON (:func:`~interlock.blocks.info.plain`).
+OBJ_LABEL, OBJ_INFO = "# interlock label ", "# interlock info "
+#: GLB scene extras and 3MF model metadata of :func:`~interlock.gallery.export.export`: the labels, as
+#: ``{block name: [kind, text]}``, and ``Assembly.info`` as JSON.
+LABELS_KEY, INFO_KEY = "interlock_labels", "interlock_info"
 #: glTF 2.0 says +Y is up; interlock's gravity is along -Z.  This rotation turns glTF coordinates into
 #: interlock's, ``(x, y, z) -> (x, -z, y)``: reading applies it to every node, writing its inverse (transpose),
 #: so a file written and read back has the same coordinates to the last bit (the entries are 0 and +-1).
@@ -86,13 +97,18 @@ class MeshFile:
     ``frame`` lists the indices of the blocks that the file marks fixed, or is
     None when the file stores no frame.  ``announced`` is the number of
     blocks that the file says it holds (its :func:`file_header`, or its
-    block indices), or None if it does not say.
+    block indices), or None if it does not say.  ``labels`` maps block names
+    to the labels the file stores for them (OBJ, GLB and 3MF files of
+    :func:`~interlock.gallery.export.export`; :mod:`~interlock.blocks.labels`),
+    and ``info`` is the ``Assembly.info`` it stores (plain values), or None.
     """
 
     names: tuple[str, ...]
     meshes: tuple[trimesh.Trimesh, ...]
     frame: tuple[int, ...] | None = None
     announced: int | None = None
+    labels: dict = field(default_factory=dict)
+    info: dict | None = None
 
 
 def read_mesh_file(path, split: bool = True) -> MeshFile:
@@ -460,12 +476,13 @@ def _scene_file(path: Path) -> tuple[MeshFile, bool]:
     if not placed:
         return MeshFile((), ()), False
     announced = _scene_header(path, scene)
+    labels, info = _scene_meaning(path, scene)
     frame = _named_frame(path, [node[1] for node in nodes], announced)
     offsets = np.cumsum([0] + [len(v) for v, _ in placed])
     meshes = group_meshes(np.vstack([v for v, _ in placed]), np.vstack([f + o for (_, f), o in zip(placed, offsets)]),
                      np.repeat(np.arange(len(placed)), [len(f) for _, f in placed]))
     count = None if announced is None else announced[0]
-    return MeshFile(tuple(node[0] for node in nodes), tuple(meshes), frame, count), len(nodes) > 1
+    return MeshFile(tuple(node[0] for node in nodes), tuple(meshes), frame, count, labels, info), len(nodes) > 1
 
 
 def _scene_header(path: Path, scene) -> tuple | None:
@@ -476,6 +493,42 @@ def _scene_header(path: Path, scene) -> tuple | None:
             return next(filter(None, (_announced(package.open(name).read(4096)) for name in models)), None)
     text = scene.metadata.get("interlock") if isinstance(scene.metadata, dict) else None
     return _announced(text) if isinstance(text, str) else None
+
+
+def _scene_meaning(path: Path, scene) -> tuple[dict, dict | None]:
+    """The labels (by block name) and the info that a GLB (scene extras) or 3MF (model metadata) file stores.
+
+    What is not as :func:`~interlock.gallery.export.export` writes it (a file edited by hand) is left out.
+    """
+    if path.suffix.lower() == ".3mf":
+        stored = {}
+        with zipfile.ZipFile(path) as package:
+            for name in (n for n in package.namelist() if n.lower().endswith(".model")):
+                for event, element in ElementTree.iterparse(package.open(name), events=("start", "end")):
+                    tag = element.tag.rpartition("}")[2]
+                    if tag == "resources":  # the model's metadata come before its resources
+                        break
+                    if event == "end" and tag == "metadata" and element.get("name", "").startswith("interlock:"):
+                        stored[element.get("name").partition(":")[2]] = _json(element.text)
+    else:
+        stored = scene.metadata if isinstance(scene.metadata, dict) else {}
+    pairs, info = stored.get(LABELS_KEY), stored.get(INFO_KEY)
+    labels = {name: label_from_text(*pair) for name, pair in pairs.items() if _pair(pair)} \
+        if isinstance(pairs, dict) else {}
+    return labels, info if isinstance(info, dict) else None
+
+
+def _json(text):
+    """The value of a JSON text; None for one that is not JSON."""
+    try:
+        return json.loads(text or "")
+    except ValueError:
+        return None
+
+
+def _pair(value) -> bool:
+    """Whether ``value`` is a ``[kind, text]`` pair of :func:`~interlock.blocks.labels.label_text`."""
+    return isinstance(value, list) and len(value) == 2 and all(isinstance(v, str) for v in value)
 
 
 # --- OBJ -------------------------------------------------------------------------
@@ -492,6 +545,8 @@ class _Obj:
     announced: tuple | None
     polygon_group: np.ndarray
     group_names: tuple[str, ...]
+    object_labels: dict  # object index -> [kind, text], from OBJ_LABEL lines
+    info: dict | None  # from the OBJ_INFO line
 
 
 def _obj_file(path: Path) -> tuple[MeshFile, bool]:
@@ -527,14 +582,20 @@ def _obj_file(path: Path) -> tuple[MeshFile, bool]:
     names, fixed = zip(*(_flagged_name(object_names[k]) for k in objects.tolist()))
     if len(objects) > 1:  # one block per object, in file order
         meshes = group_meshes(obj.vertices, faces, np.searchsorted(objects, face_object))
-        return MeshFile(names, tuple(meshes), _named_frame(path, fixed, obj.announced), blocks), True
+        labels = {} if object_names is obj.group_names else {
+            name: label_from_text(*obj.object_labels[k]) for name, k in zip(names, objects.tolist())
+            if k in obj.object_labels}
+        return MeshFile(names, tuple(meshes), _named_frame(path, fixed, obj.announced), blocks, labels, obj.info), True
     closed, separated = _separate(obj.vertices, faces, obj.vertex_run)
     frame = _named_frame(path, fixed, obj.announced)
     if closed is not None:
         closed = _welded_bodies(path, *closed)
     if closed is None:
         mesh = group_meshes(obj.vertices, faces, np.zeros(len(faces), dtype=int))[0]
-        return MeshFile((names[0] if names and names[0] else "body0",), (mesh,), frame, blocks), separated
+        name = names[0] if names and names[0] else "body0"
+        pair = obj.object_labels.get(int(objects[0])) if object_names is obj.object_names else None
+        labels = {} if pair is None else {name: label_from_text(*pair)}
+        return MeshFile((name,), (mesh,), frame, blocks, labels, obj.info), separated
     meshes = group_meshes(*closed)
     frame = None if frame is None else tuple(range(len(meshes))) if frame else ()  # bodies of one object
     return MeshFile(tuple(f"body{k}" for k in range(len(meshes))), tuple(meshes), frame, blocks), True
@@ -610,6 +671,7 @@ def _parse_obj(path: Path) -> _Obj:
         raise AssemblyError(f"{path} was written by interlock but its header ('# interlock blocks=N ...') is "
                             "damaged, so it cannot tell whether it is whole; export it again")
     rows, polygons, seen, objects, runs, names, groups, group_names = [], [], [], [], [], [""], [], [""]
+    object_labels, info = {}, None
     run, after_face = 0, False
     last = max((k for k, line in enumerate(lines) if line.strip()), default=-1)
     for number, line in enumerate(lines):
@@ -641,6 +703,10 @@ def _parse_obj(path: Path) -> _Obj:
                 names.append(line.strip()[1:].strip())
             elif tag == "g":
                 group_names.append(line.strip()[1:].strip())
+            elif line.startswith(OBJ_LABEL) and _pair(pair := _json(line[len(OBJ_LABEL):])):
+                object_labels[len(names) - 1] = pair
+            elif line.startswith(OBJ_INFO) and isinstance(stored := _json(line[len(OBJ_INFO):]), dict):
+                info = stored
         except ValueError as error:
             if number == last:  # the file ends in the middle of this line
                 break
@@ -655,4 +721,5 @@ def _parse_obj(path: Path) -> _Obj:
         raise AssemblyError(f"{path} has faces with vertex indices outside 1..{len(vertices)} "
                             f"(e.g. {corners[bad][0] + 1}); the file is cut short or damaged")
     return _Obj(vertices, corners, counts, np.array(objects, dtype=np.int64), tuple(names),
-                np.array(runs, dtype=np.int64), announced, np.array(groups, dtype=np.int64), tuple(group_names))
+                np.array(runs, dtype=np.int64), announced, np.array(groups, dtype=np.int64), tuple(group_names),
+                object_labels, info)

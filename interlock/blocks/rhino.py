@@ -11,11 +11,12 @@ import trimesh
 
 from interlock.blocks.classes import block_classes
 from interlock.blocks.info import plain, restored
+from interlock.blocks.labels import label_from_text, label_text
 from interlock.blocks.lozenge import Lozenge
 from interlock.blocks.repair import merge_vertices, split_t_junctions, triangulate_polygons, unmatched_edges
 from interlock.errors import AssemblyError
 from interlock.files import atomic_write, unwritable
-from interlock.wallpaper.elements import GroupElement, parse_symop
+from interlock.wallpaper.elements import GroupElement
 
 __all__ = ["write_3dm", "read_3dm_blocks", "RhinoError", "FRAME_LAYER", "MARKER_KEY", "INFO_KEY", "MISSING_MESSAGE",
            "RHINO_VERSION", "LAYER_COLOURS"]
@@ -196,7 +197,7 @@ def _add_layer(rhino, document, name: str, colour) -> int:
 
 def _block_strings(assembly, i: int, value: int, kind: str, world: trimesh.Trimesh) -> dict[str, str]:
     label = assembly.labels[i]
-    label_type, text = _label_text(label)
+    label_type, text = label_text(label)
     strings = {"block": str(i), "label": text, "label_type": label_type, "class": str(value), "class_kind": kind,
                "fixed": str(i in assembly.frame).lower(), "mirrored": str(bool(assembly.mirrored[i])).lower(),
                "type": str(int(assembly.types[i])),
@@ -208,21 +209,6 @@ def _block_strings(assembly, i: int, value: int, kind: str, world: trimesh.Trime
     elif isinstance(label, Lozenge):
         strings["orientation"] = str(label.orientation)
     return strings
-
-
-def _label_text(label) -> tuple[str, str]:
-    """How a label is stored: its kind and a text it can be rebuilt from."""
-    if isinstance(label, GroupElement):
-        return "element", str(label)
-    if isinstance(label, Lozenge):
-        return "lozenge", f"{label.i},{label.j},{label.orientation}"
-    if isinstance(label, tuple) and all(isinstance(v, (int, np.integer)) for v in label):
-        return "integers", ",".join(str(int(v)) for v in label)
-    if isinstance(label, (int, np.integer)) and not isinstance(label, (bool, np.bool_)):
-        return "int", str(int(label))
-    if isinstance(label, str):
-        return "str", label
-    return "text", str(label)
 
 
 def _write_atomically(document, path: Path, version: int):
@@ -370,16 +356,4 @@ def _closed_faces(vertices: np.ndarray, faces: np.ndarray, where: str, what: str
 
 def _label(strings: dict[str, str]):
     """The label written by :func:`write_3dm`, rebuilt from its text."""
-    kind, text = strings.get("label_type", "text"), strings.get("label", "")
-    try:
-        if kind == "element":
-            return parse_symop(text)
-        if kind == "lozenge":
-            return Lozenge(*(int(v) for v in text.split(",")))
-        if kind == "integers":
-            return tuple(int(v) for v in text.split(",")) if text else ()
-        if kind == "int":
-            return int(text)
-    except (ValueError, TypeError):
-        return text
-    return text
+    return label_from_text(strings.get("label_type", "text"), strings.get("label", ""))

@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import io
+import json
 import math
 import zipfile
+from xml.sax.saxutils import escape
 from numbers import Real
 from pathlib import Path
 
@@ -16,28 +18,33 @@ from trimesh.visual.material import PBRMaterial
 
 from interlock.blocks.assembly import Assembly
 from interlock.blocks.compas import write_compas
+from interlock.blocks.info import plain
+from interlock.blocks.labels import label_text
 from interlock.blocks.rhino import write_3dm
-from interlock.blocks.meshfiles import (BLOCK_DATA, FIXED_DATA, FIXED_WORD, GLTF_TO_Z_UP, OBJ_SECOND_LINE,
-                                       STL_FIXED_BIT, STL_MAX_FRAMED, STL_RECORD, file_header)
+from interlock.blocks.meshfiles import (BLOCK_DATA, FIXED_DATA, FIXED_WORD, GLTF_TO_Z_UP, INFO_KEY, LABELS_KEY,
+                                       OBJ_INFO, OBJ_LABEL, OBJ_SECOND_LINE, STL_FIXED_BIT, STL_MAX_FRAMED,
+                                       STL_RECORD, file_header)
 from interlock.errors import GalleryError
 from interlock.files import atomic_write, unwritable, write_atomically
 from interlock.gallery import appearance
 
-__all__ = ["export", "FORMATS"]
+__all__ = ["export", "FORMATS", "LABELLED_FORMATS"]
 
 #: The file formats :func:`export` writes, by suffix, and how each keeps the blocks apart and stores the frame.
 FORMATS = {
     ".stl": "binary STL; block index in each triangle's attribute bytes, its top bit set for fixed blocks; "
             "'interlock blocks=N fixed=K' in the header",
-    ".obj": "Wavefront OBJ; one object per block, 'block_0007' or 'block_0007 fixed'; "
-            "'# interlock blocks=N fixed=K triangles=T'; class colours in a .mtl file beside it",
+    ".obj": "Wavefront OBJ; one object per block, 'block_0007' or 'block_0007 fixed', its label in a comment "
+            "'# interlock label [kind, text]'; '# interlock blocks=N fixed=K triangles=T' and '# interlock info "
+            "{...}'; class colours in a .mtl file beside it",
     ".ply": "binary PLY; one mesh, per-face 'block' index, 'fixed' flag and class colour; "
-            "'comment interlock blocks=N fixed=K'",
+            "'comment interlock blocks=N fixed=K'; no labels",
     ".glb": "binary glTF, +Y up as glTF says (interlock's z is glTF's y); one node per block, 'block_0007' or "
-            "'block_0007 fixed', one mesh per block type and class, class colours; 'interlock blocks=N fixed=K' "
-            "in the scene extras",
+            "'block_0007 fixed', one mesh per block type and class, class colours; 'interlock blocks=N fixed=K', "
+            "the labels and the info in the scene extras",
     ".3mf": "3MF; one build item per block (part number 'block_0007' or 'block_0007 fixed'), one object per block "
-            "type and class, class colours; 'interlock blocks=N fixed=K' in the model metadata",
+            "type and class, class colours; 'interlock blocks=N fixed=K', the labels and the info in the model "
+            "metadata",
     ".vtu": "VTK unstructured grid; triangles with cell data block, class, mirrored, fixed",
     ".xdmf": "XDMF with inline XML data; triangles with cell data block, class, mirrored, fixed",
     ".3dm": "Rhino 3dm (rhino3dm, the 'rhino' extra); one mesh object per block named 'block_0007 <label>', "
@@ -46,6 +53,10 @@ FORMATS = {
     ".json": "COMPAS assembly JSON (compas_assembly / compas_cra); one node per block with is_support from the "
              "frame, names and labels as node attributes, info as an assembly attribute",
 }
+
+#: The formats that keep the blocks' labels and ``Assembly.info`` (:mod:`interlock.blocks.labels`); the others
+#: keep the blocks and the frame, and the labels come back as ``"<file name>:block_0007"``.
+LABELLED_FORMATS = (".obj", ".glb", ".3mf", ".3dm", ".json")
 
 #: The most blocks an STL file can tell apart: block indices in the triangles' 2-byte attribute.  Up to
 #: :data:`~interlock.blocks.meshfiles.STL_MAX_FRAMED` blocks the top bit of the attribute carries the
@@ -229,6 +240,16 @@ def _header(assembly: Assembly, triangles: int | None = None) -> str:
     return file_header(len(assembly), len(assembly.frame), triangles)
 
 
+def _labels(assembly: Assembly) -> dict[str, list[str]]:
+    """``{block name: [kind, text]}`` (:func:`~interlock.blocks.labels.label_text`), the names without ``fixed``."""
+    return {_block_name(i): list(label_text(label)) for i, label in enumerate(assembly.labels)}
+
+
+def _json(value) -> str:
+    """``value`` as one line of JSON (``Assembly.info`` through :func:`~interlock.blocks.info.plain`)."""
+    return json.dumps(value, allow_nan=False, separators=(",", ":"))
+
+
 # --- writers -------------------------------------------------------------------
 def _write_stl(assembly: Assembly, path: Path):
     vertices, faces, _, face_start = _world(assembly)
@@ -265,11 +286,14 @@ def _write_obj(assembly: Assembly, path: Path):
     with atomic_write(path) as temporary, open(temporary, "w") as file:
         file.write(f"# {_header(assembly, len(faces))}\n")
         file.write(f"{OBJ_SECOND_LINE}; materials by {kind}\n")
+        file.write(f"{OBJ_INFO}{_json(plain(assembly.info))}\n")
         file.write(f"mtllib {materials.name}\n")
+        labels = _labels(assembly)
         for i in range(len(assembly)):
             block_vertices = vertices[vertex_start[i]:vertex_start[i + 1]]
             block_faces = faces[face_start[i]:face_start[i + 1]] + 1
-            file.write(f"o {_block_name(i, frame)}\nusemtl class_{classes[i]}\n")
+            file.write(f"o {_block_name(i, frame)}\n{OBJ_LABEL}{_json(labels[_block_name(i)])}\n"
+                       f"usemtl class_{classes[i]}\n")
             file.write("v %r %r %r\n" * len(block_vertices) % tuple(block_vertices.ravel().tolist()))
             file.write("f %d %d %d\n" * len(block_faces) % tuple(block_faces.ravel().tolist()))
 
@@ -314,6 +338,8 @@ def _write_glb(assembly: Assembly, path: Path):
         scene.graph.update(frame_from=scene.graph.base_frame, frame_to=_block_name(i, frame), matrix=placement,
                            geometry=f"part_{k}")
     scene.metadata["interlock"] = _header(assembly)  # the scene's extras
+    scene.metadata[LABELS_KEY] = _labels(assembly)
+    scene.metadata[INFO_KEY] = plain(assembly.info)
     write_atomically(path, scene.export(file_type="glb"))
 
 
@@ -324,8 +350,10 @@ def _write_3mf(assembly: Assembly, path: Path):
                 '<model unit="millimeter" xml:lang="en-US" '
                 'xmlns="http://schemas.microsoft.com/3dmanufacturing/core/2015/02" '
                 f'xmlns:interlock="{_3MF_NAMESPACE}">\n'
-                f'<metadata name="interlock:header">{_header(assembly)}</metadata>\n<resources>\n'
-                '<basematerials id="1">\n')
+                f'<metadata name="interlock:header">{_header(assembly)}</metadata>\n'
+                f'<metadata name="interlock:{LABELS_KEY}">{escape(_json(_labels(assembly)))}</metadata>\n'
+                f'<metadata name="interlock:{INFO_KEY}">{escape(_json(plain(assembly.info)))}</metadata>\n'
+                '<resources>\n<basematerials id="1">\n')
     for k, rgba in enumerate(colours):
         model.write(f'<base name="part_{k}" displaycolor="#{bytes(rgba.tolist()).hex().upper()}"/>\n')
     model.write("</basematerials>\n")

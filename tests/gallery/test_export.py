@@ -16,7 +16,7 @@ from interlock.blocks.assembly import HEADER_MARKER, STL_RECORD
 from interlock.blocks.meshfiles import STL_FIXED_BIT, STL_MAX_FRAMED
 from interlock.errors import GalleryError
 from interlock.gallery.appearance import PALETTE, block_classes, block_colours
-from interlock.gallery.export import FORMATS, STL_MAX_BLOCKS, export
+from interlock.gallery.export import FORMATS, LABELLED_FORMATS, STL_MAX_BLOCKS, export
 
 
 @pytest.fixture(scope="module")
@@ -261,3 +261,50 @@ def test_a_read_only_folder_is_a_gallery_error(tmp_path, assemblies, monkeypatch
             mode & os.W_OK and not os.stat(path).st_mode & 0o200))
     with pytest.raises(GalleryError, match="read-only is not writable"):
         export(assemblies["p4"], folder / "blocks.stl")
+
+
+@pytest.fixture(scope="module")
+def labelled(assemblies):
+    """Labels of every kind a generator makes: group elements (p4), lozenges (RhomBlocks), tuples of text and
+    integers (the arch: ("support", "left"), ("voussoir", 3)), and text."""
+    from interlock.blocks.arch import semicircular_arch
+
+    arch = semicircular_arch(8)
+    named = Assembly.from_meshes(list(arch.world_meshes()), frame=arch.frame,
+                                 labels=[f"stone {k}" for k in range(len(arch))], info={"site": "yard", "mu": 0.6})
+    return {"p4": assemblies["p4"], "rhomblock": assemblies["rhomblock"], "arch": arch, "named": named}
+
+
+@pytest.mark.parametrize("suffix", LABELLED_FORMATS)
+@pytest.mark.parametrize("name", ["p4", "rhomblock", "arch", "named"])
+def test_labelled_formats_keep_the_labels_and_the_info(tmp_path, labelled, name, suffix):
+    assembly = labelled[name]
+    back = Assembly.load(export(assembly, tmp_path / f"{name}{suffix}"))
+    assert back.labels == assembly.labels  # the objects, not their text: GroupElement, Lozenge, tuples
+    assert [type(label) for label in back.labels] == [type(label) for label in assembly.labels]
+    for key, value in assembly.info.items():
+        assert back.info[key] == value, key
+
+
+@pytest.mark.parametrize("suffix", [s for s in FORMATS if s not in LABELLED_FORMATS])
+def test_other_formats_name_the_blocks_by_file_and_index(tmp_path, labelled, suffix):
+    back = Assembly.load(export(labelled["arch"], tmp_path / f"arch{suffix}"))
+    assert back.labels[:2] == (f"arch{suffix}:block_0000", f"arch{suffix}:block_0001")
+
+
+def test_a_label_edited_by_hand_falls_back_to_the_text_or_the_object_name(tmp_path, labelled):
+    arch = labelled["arch"]
+    path = export(arch, tmp_path / "arch.obj")
+    text = path.read_text().replace('# interlock label ["json","[\\"voussoir\\", 0]"]', '# interlock label ["json"',
+                                    1)
+    text = text.replace('# interlock label ["json","[\\"voussoir\\", 1]"]', '# interlock label ["int","one"]', 1)
+    path.write_text(text)
+    back = Assembly.load(path)
+    assert back.labels[:2] == ("arch.obj:block_0000", "one") and back.labels[2:] == arch.labels[2:]
+
+
+@pytest.mark.parametrize("suffix", [".obj", ".glb", ".3mf"])
+def test_a_single_block_keeps_its_label_and_info(tmp_path, suffix):
+    one = Assembly.from_meshes([trimesh.creation.box()], labels=[("solo", 1)], info={"note": "one block"})
+    back = Assembly.load(export(one, tmp_path / f"one{suffix}"))
+    assert back.labels == (("solo", 1),) and back.info["note"] == "one block"
