@@ -16,7 +16,7 @@ import trimesh
 from interlock.blocks.compas import read_compas
 from interlock.blocks.info import restored
 from interlock.blocks.meshfiles import BLOCK_DATA, HEADER_MARKER, STL_RECORD, read_mesh_file
-from interlock.blocks.repair import TJUNCTION_RTOL, split_t_junctions, unmatched_edges
+from interlock.blocks.repair import TJUNCTION_RTOL, consistently_wound, split_t_junctions, unmatched_edges
 from interlock.blocks.rhino import FRAME_LAYER, read_3dm_blocks
 from interlock.errors import AssemblyError
 
@@ -495,8 +495,9 @@ def _checked_meshes(meshes, names) -> tuple[trimesh.Trimesh, ...]:
     Non-manifold edges (four faces meeting, as in voxel parts) are allowed, and so are
     T-junctions: meshes with unmatched edges get them split at the vertices on them
     (:func:`~interlock.blocks.repair.split_t_junctions`, :data:`~interlock.blocks.repair.TJUNCTION_RTOL`)
-    before they are judged.  All meshes are checked at once with numpy (edges,
-    T-junctions, signed volumes); only meshes that need it are rebuilt.
+    before they are judged, and if that does not close them, their repeated triangles dropped and their
+    winding made consistent (:func:`~interlock.blocks.repair.consistently_wound`).  All meshes are checked
+    at once with numpy (edges, T-junctions, signed volumes); only meshes that need it are rebuilt.
     """
     for mesh, name in zip(meshes, names):
         if not isinstance(mesh, trimesh.Trimesh):
@@ -513,15 +514,19 @@ def _checked_meshes(meshes, names) -> tuple[trimesh.Trimesh, ...]:
     meshes = list(meshes)
     if open_meshes.size:
         split = split_t_junctions(vertices, np.vstack([faces[k] for k in open_meshes]), TJUNCTION_RTOL, vertex_mesh)
-        still = vertex_mesh[unmatched_edges(split)[:, 0]]
-        if still.size:
-            k = int(still.min())
-            raise AssemblyError(f"{names[k]} is not a closed, consistently oriented surface "
-                                f"({np.count_nonzero(still == k)} edges without a matching opposite edge, also after "
-                                "splitting edges at the vertices on them); blocks must be closed polyhedra")
         split = split[np.argsort(vertex_mesh[split[:, 0]], kind="stable")]
         ends = np.searchsorted(vertex_mesh[split[:, 0]], open_meshes, side="right")
         for k, own in zip(open_meshes.tolist(), np.split(split, ends[:-1])):
+            still = unmatched_edges(own)
+            if still.size:  # triangles twice or wound the other way round: the same solid, once repaired
+                wound = consistently_wound(meshes[k].vertices, own - offsets[k])
+                if wound is None:
+                    raise AssemblyError(
+                        f"{names[k]} is not a closed surface ({len(still)} edges without a matching opposite edge, "
+                        "also after splitting edges at the vertices on them, dropping repeated triangles and "
+                        "making the winding consistent): it has holes or loose triangles; blocks must be closed "
+                        "polyhedra")
+                own = wound + offsets[k]
             faces[k] = own
             meshes[k] = trimesh.Trimesh(meshes[k].vertices, own - offsets[k], process=False)
     for k in np.flatnonzero(_signed_volumes(vertices, faces, offsets) <= 0).tolist():

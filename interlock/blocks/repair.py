@@ -7,8 +7,8 @@ import shapely
 import trimesh
 from scipy.spatial import cKDTree
 
-__all__ = ["merge_vertices", "triangulate_polygons", "unmatched_edges", "split_t_junctions", "group_meshes",
-           "closed_groups", "MERGE_RTOL", "TJUNCTION_RTOL"]
+__all__ = ["merge_vertices", "triangulate_polygons", "unmatched_edges", "split_t_junctions", "consistently_wound",
+           "group_meshes", "closed_groups", "MERGE_RTOL", "TJUNCTION_RTOL"]
 
 #: Vertices closer than this (relative to the extent of all vertices, per coordinate) are one vertex.
 #: About what trimesh merges (1e-8 absolute) on unit-sized models, but relative, so that a model in
@@ -158,6 +158,41 @@ def unmatched_edges(faces) -> np.ndarray:
     reverse_counts = np.where(codes[at] == reverse, counts[at], 0)
     bad = codes[counts != reverse_counts]
     return np.column_stack([bad // n, bad % n])
+
+
+def consistently_wound(vertices, faces) -> np.ndarray | None:
+    """The faces of one surface with repeated triangles dropped and the winding made consistent, if that closes
+    it (:func:`unmatched_edges` finds none); else None.
+
+    CAD and scanning tools write closed surfaces with some triangles twice, or
+    wound the other way round.  Neither changes the solid: a repeated triangle
+    (the same corners in the same cyclic order) is kept once, and the winding
+    is made to agree across every edge of two triangles, from a breadth-first
+    walk over the surface (``trimesh.repair.fix_winding``).  Which way round
+    the whole surface then is, is left to the caller (its signed volume).  A
+    surface of several shells (a hollow block) is not repaired: which way each
+    shell faces decides the solid.
+    A triangle and its reverse both present (a sheet of no thickness) is
+    already consistent and is kept.
+
+    Examples
+    --------
+    >>> tetrahedron = np.array([[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]])
+    >>> corners = np.eye(4, 3)
+    >>> flipped = np.vstack([tetrahedron[:3], tetrahedron[3, ::-1], tetrahedron[:1]])  # one flipped, one twice
+    >>> unmatched_edges(flipped).size > 0, unmatched_edges(consistently_wound(corners, flipped)).size
+    (True, 0)
+    """
+    faces = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
+    # each triangle from its smallest corner on, in its own cyclic order
+    turned = faces[np.arange(len(faces))[:, None], (np.argmin(faces, axis=1)[:, None] + np.arange(3)) % 3]
+    _, first = np.unique(turned, axis=0, return_index=True)  # the same cyclic order: one triangle
+    mesh = trimesh.Trimesh(np.asarray(vertices, dtype=float), faces[np.sort(first)], process=False)
+    if mesh.body_count != 1:  # shells of one block (a hollow one): which way each faces is not for us to guess
+        return None
+    trimesh.repair.fix_winding(mesh)
+    wound = np.asarray(mesh.faces, dtype=np.int64)
+    return wound if not unmatched_edges(wound).size else None
 
 
 def split_t_junctions(vertices, faces, rtol: float = TJUNCTION_RTOL, groups=None) -> np.ndarray:
