@@ -4,111 +4,35 @@ from __future__ import annotations
 
 import contextlib
 import io
-import json
-import math
 import os
 import re
 import warnings
 import zipfile
-from dataclasses import dataclass, field
-from xml.etree import ElementTree
 from pathlib import Path
+from xml.etree import ElementTree
 
 import numpy as np
 import trimesh
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
 
-from interlock.blocks.repair import (closed_groups, group_meshes, split_t_junctions, triangulate_polygons,
-                                     unmatched_edges)
 from interlock.blocks.labels import label_from_text
+from interlock.blocks.meshformat import (BLOCK_DATA, FIXED_DATA, FIXED_WORD, GLTF_SUFFIXES, GLTF_TO_Z_UP, HEADER_MARKER,
+                                         INFO_KEY, LABELS_KEY, OBJ_INFO, OBJ_LABEL, OBJ_SECOND_LINE, STL_FIXED_BIT,
+                                         STL_MAX_FRAMED, STL_RECORD, MeshFile, header_counts, file_header, flagged_name,
+                                         is_label_pair, json_value, named_frame, touching_bodies)
+from interlock.blocks.objfile import obj_file
+from interlock.blocks.repair import group_meshes, split_t_junctions, unmatched_edges
 from interlock.errors import AssemblyError
 
-__all__ = ["MeshFile", "read_mesh_file", "file_header", "HEADER_MARKER", "STL_RECORD", "BLOCK_DATA",
-           "FIXED_DATA", "FIXED_WORD", "STL_FIXED_BIT", "STL_MAX_FRAMED", "OBJ_SECOND_LINE", "OBJ_LABEL",
-           "OBJ_INFO", "LABELS_KEY", "INFO_KEY", "GLTF_TO_Z_UP",
-           "GLTF_SUFFIXES"]
+# The format's names live in interlock.blocks.meshformat; they are also importable from here, where readers and
+# writers have always found them.
+__all__ = ["MeshFile", "read_mesh_file", "readgroup_meshes", "file_header", "HEADER_MARKER", "STL_RECORD",
+           "BLOCK_DATA", "FIXED_DATA", "FIXED_WORD", "STL_FIXED_BIT", "STL_MAX_FRAMED", "OBJ_SECOND_LINE",
+           "OBJ_LABEL", "OBJ_INFO", "LABELS_KEY", "INFO_KEY", "GLTF_TO_Z_UP", "GLTF_SUFFIXES"]
 
-#: How an exported file says that it holds interlock blocks, and how many: the start of a binary STL's
-#: 80-byte header, a PLY or OBJ comment, GLB scene extras, 3MF model metadata (see :func:`file_header`).
-HEADER_MARKER = b"interlock blocks="
-#: One triangle of a binary STL: normal, three vertices, and the 2-byte attribute holding the block index.
-STL_RECORD = np.dtype([("normal", "<f4", 3), ("vertices", "<f4", (3, 3)), ("block", "<u2")])
-#: Name of the per-triangle block index in PLY (face property), VTU and XDMF (cell data) files.
-BLOCK_DATA = "block"
-#: Name of the per-triangle frame flag (1: the triangle's block is fixed) in PLY, VTU and XDMF files.
-FIXED_DATA = "fixed"
-#: The last word of the name of a fixed block's object (OBJ ``o block_0007 fixed``), node (GLB) or item (3MF).
-FIXED_WORD = "fixed"
-#: In a binary STL whose header counts the fixed blocks (``fixed=K``), this bit of each triangle's attribute
-#: marks the triangles of fixed blocks, and the 15 bits below it hold the block index.
-STL_FIXED_BIT = 1 << 15
-#: The most blocks a binary STL stores with their frame: block indices below :data:`STL_FIXED_BIT`.
-STL_MAX_FRAMED = STL_FIXED_BIT
-
-#: How the second line of an OBJ export starts (after its :func:`file_header`): a file with it and without a
-#: readable header is damaged.
-OBJ_SECOND_LINE = "# one object per block, named 'fixed' in the frame"
-#: OBJ comment lines of :func:`~interlock.gallery.export.export`: after an ``o`` line, the block's label as the
-#: JSON pair ``[kind, text]`` of :func:`~interlock.blocks.labels.label_text`; in the header, ``Assembly.info``
-#: as JSON (:func:`~interlock.blocks.info.plain`).
-OBJ_LABEL, OBJ_INFO = "# interlock label ", "# interlock info "
-#: GLB scene extras and 3MF model metadata of :func:`~interlock.gallery.export.export`: the labels, as
-#: ``{block name: [kind, text]}``, and ``Assembly.info`` as JSON.
-LABELS_KEY, INFO_KEY = "interlock_labels", "interlock_info"
-#: glTF 2.0 says +Y is up; interlock's gravity is along -Z.  This rotation turns glTF coordinates into
-#: interlock's, ``(x, y, z) -> (x, -z, y)``: reading applies it to every node, writing its inverse (transpose),
-#: so a file written and read back has the same coordinates to the last bit (the entries are 0 and +-1).
-GLTF_TO_Z_UP = np.array([[1.0, 0, 0, 0], [0, 0, -1, 0], [0, 1, 0, 0], [0, 0, 0, 1]])
-#: The suffixes of glTF files, read and written +Y up (:data:`GLTF_TO_Z_UP`).
-GLTF_SUFFIXES = (".glb", ".gltf")
 # The formats read by meshio (:func:`_meshio_triangles`).
 _MESHIO_SUFFIXES = (".vtu", ".xdmf")
 # an ASCII STL vertex line with a coordinate NaN or infinite (as Python and trimesh parse them)
 _NOT_FINITE_VERTEX = re.compile(rb"(?im)^[ \t]*vertex[ \t][^\n]*?(?<![\w.])[-+]?(?:nan|inf(?:inity)?)\b")
-_HEADER = re.compile(re.escape(HEADER_MARKER.decode()) + r"(\d+)(?: fixed=(\d+))?(?: triangles=(\d+))?")
-
-
-def file_header(blocks: int, fixed: int | None = None, triangles: int | None = None) -> str:
-    """The text by which an exported file announces its blocks, fixed blocks and (OBJ) triangles.
-
-    Loading checks a file against it: a file with fewer blocks or triangles
-    than announced is cut short.
-
-    Examples
-    --------
-    >>> file_header(27, 3)
-    'interlock blocks=27 fixed=3'
-    >>> _announced(file_header(27, 3, triangles=972))
-    (27, 3, 972)
-    """
-    text = HEADER_MARKER.decode() + str(blocks)
-    if fixed is not None:
-        text += f" fixed={fixed}"
-    if triangles is not None:
-        text += f" triangles={triangles}"
-    return text
-
-
-@dataclass(frozen=True)
-class MeshFile:
-    """The blocks of a mesh file: names and meshes (file coordinates) in file order, and the stored frame.
-
-    ``frame`` lists the indices of the blocks that the file marks fixed, or is
-    None when the file stores no frame.  ``announced`` is the number of
-    blocks that the file says it holds (its :func:`file_header`, or its
-    block indices), or None if it does not say.  ``labels`` maps block names
-    to the labels the file stores for them (OBJ, GLB and 3MF files of
-    :func:`~interlock.gallery.export.export`; :mod:`~interlock.blocks.labels`),
-    and ``info`` is the ``Assembly.info`` it stores (plain values), or None.
-    """
-
-    names: tuple[str, ...]
-    meshes: tuple[trimesh.Trimesh, ...]
-    frame: tuple[int, ...] | None = None
-    announced: int | None = None
-    labels: dict = field(default_factory=dict)
-    info: dict | None = None
 
 
 def read_mesh_file(path, split: bool = True) -> MeshFile:
@@ -158,7 +82,7 @@ def read_mesh_file(path, split: bool = True) -> MeshFile:
     (('left', 'right'), (1,), [0.166667, 0.166667])
     """
     path = _mesh_path(path)
-    reader = {".obj": _obj_file, ".stl": _stl_file, ".ply": _indexed_file, ".vtu": _indexed_file,
+    reader = {".obj": obj_file, ".stl": _stl_file, ".ply": _indexed_file, ".vtu": _indexed_file,
               ".xdmf": _indexed_file}.get(path.suffix.lower(), _scene_file)
     with warnings.catch_warnings(), np.errstate(all="ignore"):
         warnings.simplefilter("ignore")
@@ -228,19 +152,9 @@ def _splitgroup_meshes(path: Path, found: MeshFile) -> MeshFile:
     if len(parts) <= 1:
         return found
     if not all(part.is_watertight for part in parts):
-        raise AssemblyError(_touching(path))
+        raise AssemblyError(touching_bodies(path))
     frame = None if found.frame is None else tuple(range(len(parts))) if found.frame else ()
     return MeshFile(tuple(f"body{k}" for k in range(len(parts))), tuple(parts), frame)
-
-
-def _touching(path: Path) -> str:
-    """The error for bodies that touch in a file that cannot tell them apart."""
-    if path.suffix.lower() == ".obj":
-        return (f"{path} holds several bodies that touch and share vertices (welded), which an OBJ file without "
-                "objects cannot separate; give each block its own object ('o') or group ('g'), or export with "
-                "vertices not welded (merged) across blocks")
-    return (f"{path} holds several bodies that touch, which a single {path.suffix} file cannot separate; give one "
-            "file per block, or an OBJ file with one object ('o') or group ('g') per block")
 
 
 def _frame(path: Path, face_block, face_fixed, announced_fixed) -> tuple[int, ...]:
@@ -260,25 +174,9 @@ def _frame(path: Path, face_block, face_fixed, announced_fixed) -> tuple[int, ..
     return frame
 
 
-def _flagged_name(name: str) -> tuple[str, bool]:
-    """``'block_0007 fixed'`` -> ``('block_0007', True)``; other names unchanged."""
-    stem, _, last = name.strip().rpartition(" ")
-    return (stem.rstrip(), True) if stem and last.lower() == FIXED_WORD else (name.strip(), False)
-
-
 def _natural_key(name: str) -> tuple:
     """Sort key reading runs of digits as numbers: ``block_9`` before ``block_10``."""
     return tuple((0, int(part), "") if part.isdigit() else (1, 0, part) for part in re.split(r"(\d+)", name))
-
-
-def _announced(text) -> tuple[int, int | None, int | None] | None:
-    """(blocks, fixed, triangles) from a :func:`file_header` in ``text``; None without one."""
-    if isinstance(text, bytes):
-        text = text.decode("ascii", errors="replace")
-    match = _HEADER.search(text or "")
-    if match is None:
-        return None
-    return tuple(None if group is None else int(group) for group in match.groups())
 
 
 # --- files with a block index per triangle -------------------------------------
@@ -336,7 +234,7 @@ def _stl_file(path: Path) -> tuple[MeshFile | None, bool]:
 
 def _marked_stl(path: Path, header: bytes, count: int, data):
     """Vertices, faces, block and fixed flag per face, and the header of a binary STL with :data:`HEADER_MARKER`."""
-    announced = _announced(header)
+    announced = header_counts(header)
     if announced is None:
         raise AssemblyError(f"{path} says it holds interlock blocks but not how many ({header[:40]!r})")
     if len(data) != count * STL_RECORD.itemsize:
@@ -417,7 +315,7 @@ def _ply_triangles(path: Path):
             return None
         file.seek(0)
         loaded = trimesh.exchange.ply.load_ply(file)
-    announced = _announced(marker.group(1))
+    announced = header_counts(marker.group(1))
     if announced is None:
         raise AssemblyError(f"{path} says it holds interlock blocks but not how many ({marker.group(1)[:40]!r})")
     properties = loaded["metadata"]["_ply_raw"]["face"]["data"]  # every face property as read, by name
@@ -464,7 +362,7 @@ def _scene_file(path: Path) -> tuple[MeshFile, bool]:
         transform, geometry = scene.graph[node]
         mesh = scene.geometry[geometry]
         if isinstance(mesh, trimesh.Trimesh) and len(mesh.faces):
-            nodes.append((*_flagged_name(str(node)), transform, mesh))
+            nodes.append((*flagged_name(str(node)), transform, mesh))
     if len(nodes) > 1:
         nodes.sort(key=lambda node: _natural_key(node[0]))
     placed = []
@@ -477,7 +375,7 @@ def _scene_file(path: Path) -> tuple[MeshFile, bool]:
         return MeshFile((), ()), False
     announced = _scene_header(path, scene)
     labels, info = _scene_meaning(path, scene)
-    frame = _named_frame(path, [node[1] for node in nodes], announced)
+    frame = named_frame(path, [node[1] for node in nodes], announced)
     offsets = np.cumsum([0] + [len(v) for v, _ in placed])
     meshes = group_meshes(np.vstack([v for v, _ in placed]), np.vstack([f + o for (_, f), o in zip(placed, offsets)]),
                      np.repeat(np.arange(len(placed)), [len(f) for _, f in placed]))
@@ -490,9 +388,9 @@ def _scene_header(path: Path, scene) -> tuple | None:
     if path.suffix.lower() == ".3mf":
         with zipfile.ZipFile(path) as package:
             models = [name for name in package.namelist() if name.lower().endswith(".model")]
-            return next(filter(None, (_announced(package.open(name).read(4096)) for name in models)), None)
+            return next(filter(None, (header_counts(package.open(name).read(4096)) for name in models)), None)
     text = scene.metadata.get("interlock") if isinstance(scene.metadata, dict) else None
-    return _announced(text) if isinstance(text, str) else None
+    return header_counts(text) if isinstance(text, str) else None
 
 
 def _scene_meaning(path: Path, scene) -> tuple[dict, dict | None]:
@@ -509,217 +407,12 @@ def _scene_meaning(path: Path, scene) -> tuple[dict, dict | None]:
                     if tag == "resources":  # the model's metadata come before its resources
                         break
                     if event == "end" and tag == "metadata" and element.get("name", "").startswith("interlock:"):
-                        stored[element.get("name").partition(":")[2]] = _json(element.text)
+                        stored[element.get("name").partition(":")[2]] = json_value(element.text)
     else:
         stored = scene.metadata if isinstance(scene.metadata, dict) else {}
     pairs, info = stored.get(LABELS_KEY), stored.get(INFO_KEY)
-    labels = {name: label_from_text(*pair) for name, pair in pairs.items() if _pair(pair)} \
+    labels = {name: label_from_text(*pair) for name, pair in pairs.items() if is_label_pair(pair)} \
         if isinstance(pairs, dict) else {}
     return labels, info if isinstance(info, dict) else None
 
 
-def _json(text):
-    """The value of a JSON text; None for one that is not JSON."""
-    try:
-        return json.loads(text or "")
-    except ValueError:
-        return None
-
-
-def _pair(value) -> bool:
-    """Whether ``value`` is a ``[kind, text]`` pair of :func:`~interlock.blocks.labels.label_text`."""
-    return isinstance(value, list) and len(value) == 2 and all(isinstance(v, str) for v in value)
-
-
-# --- OBJ -------------------------------------------------------------------------
-@dataclass(frozen=True)
-class _Obj:
-    """The contents of an OBJ file: vertices, polygons (corners face after face), objects, groups, vertex runs."""
-
-    vertices: np.ndarray
-    corners: np.ndarray
-    counts: np.ndarray
-    polygon_object: np.ndarray
-    object_names: tuple[str, ...]
-    vertex_run: np.ndarray
-    announced: tuple | None
-    polygon_group: np.ndarray
-    group_names: tuple[str, ...]
-    object_labels: dict  # object index -> [kind, text], from OBJ_LABEL lines
-    info: dict | None  # from the OBJ_INFO line
-
-
-def _obj_file(path: Path) -> tuple[MeshFile, bool]:
-    """The blocks of an OBJ file: its objects, else its groups, else its bodies by shared vertex indices, else by
-    ``v`` runs.
-
-    Polygons are triangulated inside their outline
-    (:func:`~interlock.blocks.repair.triangulate_polygons`).  A file without
-    ``o`` objects whose ``g`` groups are each a closed surface (Rhino, 3ds Max,
-    Maya: one group per object, often over one pool of welded vertices) gives
-    one block per group, like objects.  A file of one object whose faces fall
-    into several sets that share no vertex index (Rhino's export of a
-    selection) gives one block per set when each set is a closed surface
-    (T-junctions allowed); else the same with the runs of ``v`` lines each
-    followed by its faces (:func:`_separate`); else one body, which is split
-    into its bodies across edges of two triangles (:func:`_splitgroup_meshes`).
-    Sets of faces whose bodies touch at welded vertices are split the same way
-    (:func:`_welded_bodies`); bodies that cannot be split into closed surfaces are an error.
-    """
-    obj = _parse_obj(path)
-    faces, polygon = triangulate_polygons(obj.vertices, obj.corners, obj.counts)
-    if not len(faces):
-        raise AssemblyError(f"{path} holds no faces ('f' lines), only {len(obj.vertices)} vertices: no block to "
-                            "read; a block is a closed surface of faces")
-    blocks, _, triangles = obj.announced or (None, None, None)
-    face_object, object_names = obj.polygon_object[polygon], obj.object_names
-    if len(object_names) == 1 and _closed_groups_apart(obj.vertices, faces, obj.polygon_group[polygon]):
-        face_object, object_names = obj.polygon_group[polygon], obj.group_names
-    objects = np.unique(face_object)
-    if triangles is not None and triangles != len(faces):
-        raise AssemblyError(f"{path} is cut short or damaged: it announces {blocks} blocks of {triangles} "
-                            f"triangles in all, it holds {len(objects)} objects of {len(faces)} triangles")
-    names, fixed = zip(*(_flagged_name(object_names[k]) for k in objects.tolist()))
-    if len(objects) > 1:  # one block per object, in file order
-        meshes = group_meshes(obj.vertices, faces, np.searchsorted(objects, face_object))
-        labels = {} if object_names is obj.group_names else {
-            name: label_from_text(*obj.object_labels[k]) for name, k in zip(names, objects.tolist())
-            if k in obj.object_labels}
-        return MeshFile(names, tuple(meshes), _named_frame(path, fixed, obj.announced), blocks, labels, obj.info), True
-    closed, separated = _separate(obj.vertices, faces, obj.vertex_run)
-    frame = _named_frame(path, fixed, obj.announced)
-    if closed is not None:
-        closed = _welded_bodies(path, *closed)
-    if closed is None:
-        mesh = group_meshes(obj.vertices, faces, np.zeros(len(faces), dtype=int))[0]
-        name = names[0] if names and names[0] else "body0"
-        pair = obj.object_labels.get(int(objects[0])) if object_names is obj.object_names else None
-        labels = {} if pair is None else {name: label_from_text(*pair)}
-        return MeshFile((name,), (mesh,), frame, blocks, labels, obj.info), separated
-    meshes = group_meshes(*closed)
-    frame = None if frame is None else tuple(range(len(meshes))) if frame else ()  # bodies of one object
-    return MeshFile(tuple(f"body{k}" for k in range(len(meshes))), tuple(meshes), frame, blocks), True
-
-
-def _named_frame(path: Path, fixed, announced) -> tuple[int, ...] | None:
-    """The blocks whose names end in :data:`FIXED_WORD`; None if none does and the file has no header."""
-    frame = tuple(k for k, flag in enumerate(fixed) if flag)
-    if announced is not None and announced[1] is not None and announced[1] != len(frame):
-        raise AssemblyError(f"{path} is cut short or damaged: it announces {announced[1]} fixed blocks, its "
-                            f"names mark {len(frame)}")
-    return frame if frame or announced is not None else None
-
-
-def _closed_groups_apart(vertices, faces, face_group) -> bool:
-    """Whether the faces fall into several groups (OBJ ``g``) that are each a closed surface."""
-    groups = np.unique(face_group, return_inverse=True)[1].ravel()
-    return groups.max(initial=0) > 0 and closed_groups(vertices, faces, groups) is not None
-
-
-def _welded_bodies(path: Path, vertices, faces, face_group) -> tuple:
-    """Closed groups of faces, each split into its bodies: faces connected across edges of exactly two faces.
-
-    A group of blocks that touch at welded (shared) vertices is closed (every
-    edge has its opposite) but falls apart across the edges that more than
-    two faces share; each piece must be closed, or the blocks cannot be told
-    apart (an :class:`AssemblyError`).  Groups of one body come back as they are.
-    """
-    adjacency = trimesh.Trimesh(vertices, faces, process=False).face_adjacency
-    body = trimesh.graph.connected_component_labels(adjacency, node_count=len(faces))
-    if len(np.unique(body)) == len(np.unique(face_group)):
-        return vertices, faces, face_group
-    apart = closed_groups(vertices, faces, body)
-    if apart is None:
-        raise AssemblyError(_touching(path))
-    return apart
-
-
-def _separate(vertices, faces, vertex_run) -> tuple[tuple | None, bool]:
-    """The blocks of one OBJ object: faces grouped by shared vertex indices, else by ``v`` runs.
-
-    A grouping counts when it has several groups and each is a closed
-    surface (:func:`~interlock.blocks.repair.closed_groups`).  Returns ``((vertices, faces, face groups),
-    True)``, T-junctions split; or ``(None, False)`` when all faces share
-    vertex indices (one body, to be split into bodies by edges) or neither grouping holds.
-    """
-    graph = coo_matrix((np.ones(2 * len(faces)), (faces[:, [0, 1]].ravel(), faces[:, [1, 2]].ravel())),
-                       shape=(len(vertices), len(vertices)))
-    component = connected_components(graph, directed=False)[1]
-    by_index = np.unique(component[faces[:, 0]], return_inverse=True)[1].ravel()
-    if by_index.max(initial=0) == 0:
-        return None, False
-    closed = closed_groups(vertices, faces, by_index)
-    if closed is None and (vertex_run[faces] == vertex_run[faces[:, :1]]).all():
-        by_run = np.unique(vertex_run[faces[:, 0]], return_inverse=True)[1].ravel()
-        closed = closed_groups(vertices, faces, by_run) if by_run.max(initial=0) > 0 else None
-    return closed, closed is not None
-
-
-def _parse_obj(path: Path) -> _Obj:
-    """Vertices, polygons, objects, groups and ``v`` runs of an OBJ file (``vt``, ``vn``, materials ignored).
-
-    Each ``o`` line starts an object, each ``g`` line a group (named by the
-    rest of the line).  A run of ``v`` lines starts at a ``v`` line that follows an ``f`` line.
-    Negative indices count back from the last vertex so far.  A malformed
-    last line is dropped (a file cut short); elsewhere it is an error.
-    """
-    lines = path.read_text(errors="replace").splitlines()
-    # the header comment, also when damaged (a header that is not read would let a cut-short file pass)
-    announced = next(filter(None, (_announced(line) for line in lines[:20] if not line.startswith(("v", "f")))),
-                     None)
-    if announced is None and any(line.startswith(OBJ_SECOND_LINE) for line in lines[:20]):
-        raise AssemblyError(f"{path} was written by interlock but its header ('# interlock blocks=N ...') is "
-                            "damaged, so it cannot tell whether it is whole; export it again")
-    rows, polygons, seen, objects, runs, names, groups, group_names = [], [], [], [], [], [""], [], [""]
-    object_labels, info = {}, None
-    run, after_face = 0, False
-    last = max((k for k, line in enumerate(lines) if line.strip()), default=-1)
-    for number, line in enumerate(lines):
-        parts = line.split()
-        if not parts:
-            continue
-        tag = parts[0]
-        try:
-            if tag == "v":
-                if len(parts) < 4:
-                    raise ValueError("a vertex needs three coordinates")
-                row = [float(x) for x in parts[1:4]]
-                if not all(map(math.isfinite, row)):
-                    raise ValueError("a vertex coordinate is not a finite number")
-                rows.append(row)
-                run += after_face
-                after_face = False
-                runs.append(run)
-            elif tag == "f":
-                corners = [int(token.partition("/")[0]) for token in parts[1:]]
-                if len(corners) < 3:
-                    raise ValueError("a face needs three corners")
-                polygons.append(corners)
-                seen.append(len(rows))
-                objects.append(len(names) - 1)
-                groups.append(len(group_names) - 1)
-                after_face = True
-            elif tag == "o":
-                names.append(line.strip()[1:].strip())
-            elif tag == "g":
-                group_names.append(line.strip()[1:].strip())
-            elif line.startswith(OBJ_LABEL) and _pair(pair := _json(line[len(OBJ_LABEL):])):
-                object_labels[len(names) - 1] = pair
-            elif line.startswith(OBJ_INFO) and isinstance(stored := _json(line[len(OBJ_INFO):]), dict):
-                info = stored
-        except ValueError as error:
-            if number == last:  # the file ends in the middle of this line
-                break
-            raise AssemblyError(f"{path} line {number + 1}: {error}: {line.strip()[:60]!r}") from None
-    counts = np.array([len(p) for p in polygons], dtype=np.int64)
-    corners = np.array([i for p in polygons for i in p], dtype=np.int64)
-    before = np.repeat(np.array(seen, dtype=np.int64), counts)
-    corners = np.where(corners < 0, before + corners, corners - 1)
-    vertices = np.array(rows, dtype=float).reshape(-1, 3)
-    bad = (corners < 0) | (corners >= len(vertices))
-    if bad.any():
-        raise AssemblyError(f"{path} has faces with vertex indices outside 1..{len(vertices)} "
-                            f"(e.g. {corners[bad][0] + 1}); the file is cut short or damaged")
-    return _Obj(vertices, corners, counts, np.array(objects, dtype=np.int64), tuple(names),
-                np.array(runs, dtype=np.int64), announced, np.array(groups, dtype=np.int64), tuple(group_names),
-                object_labels, info)

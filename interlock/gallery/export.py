@@ -21,9 +21,9 @@ from interlock.blocks.compas import write_compas
 from interlock.blocks.info import plain
 from interlock.blocks.labels import label_text
 from interlock.blocks.rhino import write_3dm
-from interlock.blocks.meshfiles import (BLOCK_DATA, FIXED_DATA, FIXED_WORD, GLTF_TO_Z_UP, INFO_KEY, LABELS_KEY,
-                                       OBJ_INFO, OBJ_LABEL, OBJ_SECOND_LINE, STL_FIXED_BIT, STL_MAX_FRAMED,
-                                       STL_RECORD, file_header)
+from interlock.blocks.meshformat import (BLOCK_DATA, FIXED_DATA, FIXED_WORD, GLTF_TO_Z_UP, INFO_KEY, LABELS_KEY,
+                                        OBJ_INFO, OBJ_LABEL, OBJ_SECOND_LINE, STL_FIXED_BIT, STL_MAX_FRAMED,
+                                        STL_RECORD, file_header)
 from interlock.errors import GalleryError
 from interlock.files import atomic_write, unwritable, write_atomically
 from interlock.gallery import appearance
