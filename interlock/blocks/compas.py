@@ -211,7 +211,7 @@ def write_compas(assembly, path, progress=None) -> Path:
     >>> with tempfile.TemporaryDirectory() as folder:
     ...     back = load_compas(write_compas(grid, Path(folder) / "grid.json"))
     >>> len(back), back.frame == grid.frame, back.info["names"][:2], back.info["preset"], back.labels[:2]
-    (9, True, ['block_0000', 'block_0001'], 'cube_grid', ('(0, 0)', '(0, 1)'))
+    (9, True, ['block_0000', 'block_0001'], 'cube_grid', ((0, 0), (0, 1)))
     """
     path = Path(path)
     if not len(assembly):
