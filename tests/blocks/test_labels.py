@@ -40,3 +40,8 @@ def test_each_label_gets_its_kind(label, kind):
                                         ("json", "[1, 2"), ("json", '{"a": 1}'), ("later kind", "x")])
 def test_a_text_edited_by_hand_comes_back_as_the_text(kind, text):
     assert label_from_text(kind, text) == text
+
+
+@given(st.sampled_from(LABEL_KINDS + ("unknown",)), st.text(max_size=40))
+def test_any_text_of_any_kind_gives_a_label_and_never_an_exception(kind, text):
+    label_from_text(kind, text)  # a damaged or hand-edited file: the text at worst, no traceback
