@@ -29,8 +29,6 @@ __all__ = ["MeshFile", "read_mesh_file", "readgroup_meshes", "file_header", "HEA
            "BLOCK_DATA", "FIXED_DATA", "FIXED_WORD", "STL_FIXED_BIT", "STL_MAX_FRAMED", "OBJ_SECOND_LINE",
            "OBJ_LABEL", "OBJ_INFO", "LABELS_KEY", "INFO_KEY", "GLTF_TO_Z_UP", "GLTF_SUFFIXES"]
 
-# The formats read by meshio (:func:`_meshio_triangles`).
-_MESHIO_SUFFIXES = (".vtu", ".xdmf")
 # an ASCII STL vertex line with a coordinate NaN or infinite (as Python and trimesh parse them)
 _NOT_FINITE_VERTEX = re.compile(rb"(?im)^[ \t]*vertex[ \t][^\n]*?(?<![\w.])[-+]?(?:nan|inf(?:inity)?)\b")
 
@@ -127,7 +125,7 @@ def _mesh_path(path) -> Path:
     if not path.is_file():
         raise AssemblyError(f"{path} is not a regular file (a pipe, socket or device); save the mesh to a file "
                             "and give that")
-    if path.stat().st_size == 0 and path.suffix.lower() not in _MESHIO_SUFFIXES:  # meshio's reader says so itself
+    if path.stat().st_size == 0:
         raise AssemblyError(f"{path} is empty (0 bytes): it holds no mesh")
     return path
 

@@ -13,6 +13,7 @@ def files(tmp_path_factory):
     hexagon = rhomblock_assembly(random_hexagon(3, 3, 3, seed=0), 0, frame="boundary")
     vtu, obj, stl = (export(hexagon, folder / f"h.{kind}").read_bytes() for kind in ("vtu", "obj", "stl"))
     (folder / "empty.vtu").write_bytes(b"")
+    (folder / "empty.xdmf").write_bytes(b"")
     (folder / "half.vtu").write_bytes(vtu[:len(vtu) // 2])
     (folder / "half.obj").write_bytes(obj[:len(obj) // 2])
     import trimesh
@@ -25,7 +26,8 @@ def files(tmp_path_factory):
 
 
 @pytest.mark.parametrize("name, message", [
-    ("empty.vtu", "cannot read .*empty.vtu as VTU: the file is empty, cut short or damaged"),
+    ("empty.vtu", r"empty.vtu is empty \(0 bytes\): it holds no mesh"),
+    ("empty.xdmf", r"empty.xdmf is empty \(0 bytes\): it holds no mesh"),
     ("half.vtu", "cannot read .*half.vtu as VTU: the file is empty, cut short or damaged"),
     ("half.obj", "cut short or damaged: it announces 27 blocks"),
     ("half-plain.stl", "is not a complete STL: .* announces 12 triangles .* cut short"),
