@@ -20,7 +20,7 @@ from interlock.blocks.meshformat import (BLOCK_DATA, FIXED_DATA, FIXED_WORD, GLT
                                          STL_MAX_FRAMED, STL_RECORD, MeshFile, header_counts, file_header, flagged_name,
                                          is_label_pair, json_value, named_frame, touching_bodies)
 from interlock.blocks.objfile import obj_file
-from interlock.blocks.repair import group_meshes, split_t_junctions, unmatched_edges
+from interlock.blocks.repair import group_meshes, split_t_junctions, unmatched_edges, unrepeated
 from interlock.errors import AssemblyError
 
 # The format's names live in interlock.blocks.meshformat; they are also importable from here, where readers and
@@ -144,8 +144,9 @@ def _splitgroup_meshes(path: Path, found: MeshFile) -> MeshFile:
     into open pieces; a single STL or PLY file cannot tell them apart.
     """
     mesh = found.meshes[0]
-    if len(unmatched_edges(mesh.faces)):
-        mesh = trimesh.Trimesh(mesh.vertices, split_t_junctions(mesh.vertices, mesh.faces), process=False)
+    if len(unmatched_edges(mesh.faces)):  # repeated triangles would make a body look like two that touch
+        faces = unrepeated(mesh.faces)
+        mesh = trimesh.Trimesh(mesh.vertices, split_t_junctions(mesh.vertices, faces), process=False)
     parts = mesh.split(only_watertight=False)
     if len(parts) <= 1:
         return found

@@ -7,8 +7,8 @@ import shapely
 import trimesh
 from scipy.spatial import cKDTree
 
-__all__ = ["merge_vertices", "triangulate_polygons", "unmatched_edges", "split_t_junctions", "consistently_wound",
-           "group_meshes", "closed_groups", "MERGE_RTOL", "TJUNCTION_RTOL"]
+__all__ = ["merge_vertices", "triangulate_polygons", "unmatched_edges", "split_t_junctions", "unrepeated",
+           "consistently_wound", "group_meshes", "closed_groups", "MERGE_RTOL", "TJUNCTION_RTOL"]
 
 #: Vertices closer than this (relative to the extent of all vertices, per coordinate) are one vertex.
 #: About what trimesh merges (1e-8 absolute) on unit-sized models, but relative, so that a model in
@@ -160,6 +160,22 @@ def unmatched_edges(faces) -> np.ndarray:
     return np.column_stack([bad // n, bad % n])
 
 
+def unrepeated(faces) -> np.ndarray:
+    """The triangles ``faces``, each that occurs more than once (the same corners in the same cyclic order) kept
+    once, in the order of first occurrence.  A triangle and its reverse are two triangles.
+
+    Examples
+    --------
+    >>> unrepeated([[0, 1, 2], [1, 2, 0], [0, 2, 1], [2, 3, 4]]).tolist()
+    [[0, 1, 2], [0, 2, 1], [2, 3, 4]]
+    """
+    faces = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
+    # each triangle from its smallest corner on, in its own cyclic order
+    turned = faces[np.arange(len(faces))[:, None], (np.argmin(faces, axis=1)[:, None] + np.arange(3)) % 3]
+    _, first = np.unique(turned, axis=0, return_index=True)
+    return faces[np.sort(first)]
+
+
 def consistently_wound(vertices, faces) -> np.ndarray | None:
     """The faces of one surface with repeated triangles dropped and the winding made consistent, if that closes
     it (:func:`unmatched_edges` finds none); else None.
@@ -183,11 +199,7 @@ def consistently_wound(vertices, faces) -> np.ndarray | None:
     >>> unmatched_edges(flipped).size > 0, unmatched_edges(consistently_wound(corners, flipped)).size
     (True, 0)
     """
-    faces = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
-    # each triangle from its smallest corner on, in its own cyclic order
-    turned = faces[np.arange(len(faces))[:, None], (np.argmin(faces, axis=1)[:, None] + np.arange(3)) % 3]
-    _, first = np.unique(turned, axis=0, return_index=True)  # the same cyclic order: one triangle
-    mesh = trimesh.Trimesh(np.asarray(vertices, dtype=float), faces[np.sort(first)], process=False)
+    mesh = trimesh.Trimesh(np.asarray(vertices, dtype=float), unrepeated(faces), process=False)
     if mesh.body_count != 1:  # shells of one block (a hollow one): which way each faces is not for us to guess
         return None
     trimesh.repair.fix_winding(mesh)

@@ -222,3 +222,17 @@ def test_glb_export_is_y_up_and_reads_back_to_the_same_coordinates_names_and_fra
             np.testing.assert_array_equal(_sorted_rows(mesh.vertices), expected)
         else:  # the part's vertices are float32 in the file
             np.testing.assert_allclose(_sorted_rows(mesh.vertices), expected, atol=1e-6)
+
+
+@pytest.mark.parametrize("suffix", [".stl", ".obj"])
+def test_bodies_with_repeated_or_flipped_triangles_load_as_the_solids_they_bound(tmp_path, suffix):
+    # a CAD export: two separate cubes in one plain file, one with a triangle written twice, the other with one
+    # wound the other way round; they are two unit cubes, not "bodies that touch" nor "open surfaces"
+    left, right = (trimesh.creation.box(bounds=[[x, 0, 0], [x + 1, 1, 1]]) for x in (0, 2))
+    repeated = trimesh.Trimesh(left.vertices, np.vstack([left.faces, left.faces[:1]]), process=False)
+    flipped = trimesh.Trimesh(right.vertices, np.vstack([right.faces[:-1], right.faces[-1:, ::-1]]), process=False)
+    path = tmp_path / f"cad{suffix}"
+    trimesh.util.concatenate([repeated, flipped]).export(path)
+    loaded = Assembly.load(path)
+    assert len(loaded) == 2 and loaded.volumes.tolist() == pytest.approx([1.0, 1.0])
+    assert sorted(len(mesh.faces) for mesh in loaded.meshes) == [12, 12]
