@@ -187,9 +187,8 @@ def consistently_wound(vertices, faces) -> np.ndarray | None:
     walk over the surface (``trimesh.repair.fix_winding``).  Which way round
     the whole surface then is, is left to the caller (its signed volume).  A
     surface of several shells (a hollow block) is not repaired: which way each
-    shell faces decides the solid.
-    A triangle and its reverse both present (a sheet of no thickness) is
-    already consistent and is kept.
+    shell faces decides the solid.  A triangle and its reverse both present (a
+    sheet of no thickness) are kept as they are.
 
     Examples
     --------
