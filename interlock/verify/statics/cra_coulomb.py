@@ -84,7 +84,9 @@ SHUT_TOL = 1e-5
 SHUT_RESIDUAL = 1e-6
 #: Thresholds below this fraction of the largest are taken as 0 (no friction there).  Interior-point forces
 #: leave thousands of vertices at the solver's tolerance (1e-10 of the largest); a cone each for them took
-#: Clarabel 44 iterations on the armadillo vault where 24 do without (3.6 s -> 1.8 s a round).
+#: Clarabel 44 iterations on the armadillo vault where 24 do without (3.6 s -> 1.8 s a round).  A block whose
+#: contacts carry less than this share of the largest vertex force gets no friction in (T): the fixed point may
+#: then not settle it (the exact LP still judges every motion, so the answer is at worst "inconclusive").
 THRESHOLD_RTOL = 1e-6
 #: Unbalanced load per free block (in units of the free blocks' weight) below which a block counts as balanced.
 BALANCED_RTOL = 1e-7
