@@ -8,18 +8,13 @@ attributes, OBJ comments, GLB scene extras, 3MF metadata) stores the pair
 ``(kind, text)`` of :func:`label_text`, and the readers rebuild the label with
 :func:`label_from_text`:
 
-=============  =====================================  ==========================
-kind           label                                  text
-=============  =====================================  ==========================
-``element``    :class:`~interlock.wallpaper.GroupElement`  its symop, ``-y+1/2,x``
-``lozenge``    :class:`~interlock.blocks.lozenge.Lozenge`  ``i,j,orientation``
-``integers``   a tuple of integers                    ``2,-1,0``
-``int``        an integer                             ``7``
-``str``        text                                   the text
-``json``       a float, or a tuple of numbers,        JSON, tuples as lists
-               text and tuples
-``text``       anything else                          ``str(label)``; read back as text
-=============  =====================================  ==========================
+- ``element``: a :class:`~interlock.wallpaper.elements.GroupElement`, as its symop (``-y+1/2,x``);
+- ``lozenge``: a :class:`~interlock.blocks.lozenge.Lozenge`, as ``i,j,orientation``;
+- ``integers``: a tuple of integers, as ``2,-1,0``;
+- ``int``: an integer, as ``7``;
+- ``str``: text, as itself;
+- ``json``: a float, or a tuple of numbers, text and such tuples, as JSON (tuples as lists);
+- ``text``: anything else, as ``str(label)``; it is read back as that text.
 
 Examples
 --------
