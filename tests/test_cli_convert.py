@@ -64,10 +64,11 @@ def test_slow_formats_report_progress_per_block(hexagon_file, tmp_path, suffix):
 def test_labels_survive_every_labelled_format_and_the_others_say_they_drop_them(hexagon_file, tmp_path, capsys):
     hexagon, _ = hexagon_file
     source = export(hexagon, tmp_path / "hexagon.json")  # lozenge labels
-    chain = [source] + [tmp_path / f"step{k}{suffix}" for k, suffix in enumerate((".obj", ".glb", ".3mf", ".3dm"))]
+    steps = (".obj", ".ply", ".glb", ".3mf", ".3dm")
+    chain = [source] + [tmp_path / f"step{k}{suffix}" for k, suffix in enumerate(steps)]
     for there, back in zip(chain, chain[1:] + [tmp_path / "last.json"]):
         assert main(["convert", str(there), str(back)]) == 0
         assert "labels not kept" not in capsys.readouterr().out
     assert Assembly.load(tmp_path / "last.json").labels == hexagon.labels
     assert main(["convert", str(source), str(tmp_path / "flat.stl")]) == 0
-    assert "labels not kept (.stl stores none: use .obj, .glb, .3mf, .3dm, .json)" in capsys.readouterr().out
+    assert "labels not kept (.stl stores none: use .obj, .ply, .glb, .3mf, .3dm, .json)" in capsys.readouterr().out

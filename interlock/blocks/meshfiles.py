@@ -14,11 +14,10 @@ from xml.etree import ElementTree
 import numpy as np
 import trimesh
 
-from interlock.blocks.labels import label_from_text
 from interlock.blocks.meshformat import (BLOCK_DATA, FIXED_DATA, FIXED_WORD, GLTF_SUFFIXES, GLTF_TO_Z_UP, HEADER_MARKER,
                                          INFO_KEY, LABELS_KEY, OBJ_INFO, OBJ_LABEL, OBJ_SECOND_LINE, STL_FIXED_BIT,
                                          STL_MAX_FRAMED, STL_RECORD, MeshFile, header_counts, file_header, flagged_name,
-                                         is_label_pair, json_value, named_frame, touching_bodies)
+                                         json_value, named_frame, stored_labels, touching_bodies)
 from interlock.blocks.objfile import obj_file
 from interlock.blocks.repair import group_meshes, split_t_junctions, unmatched_edges, unrepeated
 from interlock.errors import AssemblyError
@@ -193,7 +192,7 @@ def _indexed_file(path: Path, triangles=None) -> tuple[MeshFile | None, bool]:
         triangles = {".ply": _ply_triangles}.get(path.suffix.lower(), _meshio_triangles)(path)
     if triangles is None:
         return None, False
-    vertices, faces, blocks, fixed, announced = triangles
+    vertices, faces, blocks, fixed, announced, labels, info = triangles
     blocks = np.asarray(blocks).astype(np.int64).ravel()
     if len(blocks) != len(faces):
         raise AssemblyError(f"{path} gives {len(blocks)} block indices for {len(faces)} triangles")
@@ -205,7 +204,7 @@ def _indexed_file(path: Path, triangles=None) -> tuple[MeshFile | None, bool]:
                             f"{len(indices)} distinct block indices ({found})")
     frame = None if fixed is None else _frame(path, blocks, np.ravel(fixed), fixed_count)
     names = tuple(f"block_{index:04d}" for index in indices.tolist())
-    return MeshFile(names, tuple(group_meshes(vertices, faces, blocks)), frame, len(indices)), True
+    return MeshFile(names, tuple(group_meshes(vertices, faces, blocks)), frame, len(indices), labels, info), True
 
 
 # --- STL -------------------------------------------------------------------------
@@ -232,7 +231,8 @@ def _stl_file(path: Path) -> tuple[MeshFile | None, bool]:
 
 
 def _marked_stl(path: Path, header: bytes, count: int, data):
-    """Vertices, faces, block and fixed flag per face, and the header of a binary STL with :data:`HEADER_MARKER`."""
+    """Vertices, faces, block and fixed flag per face, the header of a binary STL with :data:`HEADER_MARKER`, and
+    (as for PLY) its labels and info: none, an STL has no room for them."""
     announced = header_counts(header)
     if announced is None:
         raise AssemblyError(f"{path} says it holds interlock blocks but not how many ({header[:40]!r})")
@@ -244,8 +244,9 @@ def _marked_stl(path: Path, header: bytes, count: int, data):
     _check_finite_triangles(path, vertices)
     faces = np.arange(len(vertices)).reshape(-1, 3)
     if announced[1] is None:  # written before frames were stored: the attribute is the block index
-        return vertices, faces, records["block"], None, announced
-    return vertices, faces, records["block"] & (STL_FIXED_BIT - 1), records["block"] >= STL_FIXED_BIT, announced
+        return vertices, faces, records["block"], None, announced, {}, None
+    return (vertices, faces, records["block"] & (STL_FIXED_BIT - 1), records["block"] >= STL_FIXED_BIT, announced, {},
+            None)
 
 
 def _plain_binary_stl(path: Path, whole: bytes, count: int, data):
@@ -306,14 +307,21 @@ def _check_finite_triangles(path: Path, vertices: np.ndarray) -> None:
 
 
 def _ply_triangles(path: Path):
-    """Vertices, faces, block and fixed flag per face, and the header of a marked PLY; None without the comment."""
+    """Vertices, faces, block and fixed flag per face, the header, and the labels (by block name) and info of
+    the JSON comments :data:`LABELS_KEY` and :data:`INFO_KEY`, of a marked PLY; None without the comment."""
     with open(path, "rb") as file:
         header = file.read(4096).split(b"end_header", 1)[0]
         marker = re.search(rb"^comment (" + re.escape(HEADER_MARKER) + rb".*)$", header, re.MULTILINE)
         if marker is None:
             return None
         file.seek(0)
+        header = _ply_header(file)
+        file.seek(0)
         loaded = trimesh.exchange.ply.load_ply(file)
+    stored = {key: json_value(value) for key, value in
+              re.findall(rb"^comment (" + LABELS_KEY.encode() + b"|" + INFO_KEY.encode() + rb") (.*)$", header,
+                         re.MULTILINE)}
+    labels, info = stored_labels(stored.get(LABELS_KEY.encode())), stored.get(INFO_KEY.encode())
     announced = header_counts(marker.group(1))
     if announced is None:
         raise AssemblyError(f"{path} says it holds interlock blocks but not how many ({marker.group(1)[:40]!r})")
@@ -322,7 +330,19 @@ def _ply_triangles(path: Path):
     if BLOCK_DATA not in names:
         raise AssemblyError(f"{path} says it holds interlock blocks but has no face property {BLOCK_DATA!r}")
     fixed = properties[FIXED_DATA] if FIXED_DATA in names else None
-    return loaded["vertices"], loaded["faces"], properties[BLOCK_DATA], fixed, announced
+    return (loaded["vertices"], loaded["faces"], properties[BLOCK_DATA], fixed, announced, labels,
+            info if isinstance(info, dict) else None)
+
+
+def _ply_header(file) -> bytes:
+    """A PLY file's header, up to ``end_header`` (its JSON comments may make it long)."""
+    header = b""
+    while b"end_header" not in header:
+        chunk = file.read(1 << 20)
+        if not chunk:
+            break
+        header += chunk
+    return header.split(b"end_header", 1)[0]
 
 
 def _meshio_triangles(path: Path):
@@ -344,7 +364,7 @@ def _meshio_triangles(path: Path):
     fixed = None
     if FIXED_DATA in mesh.cell_data:
         fixed = np.concatenate([np.ravel(mesh.cell_data[FIXED_DATA][k]) for k in kept]) != 0
-    return mesh.points[:, :3], faces, blocks, fixed, None
+    return mesh.points[:, :3], faces, blocks, fixed, None, {}, None
 
 
 # --- files with objects ----------------------------------------------------------
@@ -409,9 +429,7 @@ def _scene_meaning(path: Path, scene) -> tuple[dict, dict | None]:
                         stored[element.get("name").partition(":")[2]] = json_value(element.text)
     else:
         stored = scene.metadata if isinstance(scene.metadata, dict) else {}
-    pairs, info = stored.get(LABELS_KEY), stored.get(INFO_KEY)
-    labels = {name: label_from_text(*pair) for name, pair in pairs.items() if is_label_pair(pair)} \
-        if isinstance(pairs, dict) else {}
-    return labels, info if isinstance(info, dict) else None
+    info = stored.get(INFO_KEY)
+    return stored_labels(stored.get(LABELS_KEY)), info if isinstance(info, dict) else None
 
 

@@ -18,12 +18,13 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
+from interlock.blocks.labels import label_from_text
 from interlock.errors import AssemblyError
 
 __all__ = ["MeshFile", "file_header", "header_counts", "flagged_name", "named_frame", "touching_bodies", "json_value",
-           "is_label_pair", "HEADER_MARKER", "STL_RECORD", "BLOCK_DATA", "FIXED_DATA", "FIXED_WORD", "STL_FIXED_BIT",
-           "STL_MAX_FRAMED", "OBJ_SECOND_LINE", "OBJ_LABEL", "OBJ_INFO", "LABELS_KEY", "INFO_KEY", "GLTF_TO_Z_UP",
-           "GLTF_SUFFIXES"]
+           "is_label_pair", "stored_labels", "HEADER_MARKER", "STL_RECORD", "BLOCK_DATA", "FIXED_DATA", "FIXED_WORD",
+           "STL_FIXED_BIT", "STL_MAX_FRAMED", "OBJ_SECOND_LINE", "OBJ_LABEL", "OBJ_INFO", "LABELS_KEY", "INFO_KEY",
+           "GLTF_TO_Z_UP", "GLTF_SUFFIXES"]
 
 #: How an exported file says that it holds interlock blocks, and how many: the start of a binary STL's
 #: 80-byte header, a PLY or OBJ comment, GLB scene extras, 3MF model metadata (see :func:`file_header`).
@@ -49,8 +50,8 @@ OBJ_SECOND_LINE = "# one object per block, named 'fixed' in the frame"
 #: JSON pair ``[kind, text]`` of :func:`~interlock.blocks.labels.label_text`; in the header, ``Assembly.info``
 #: as JSON (:func:`~interlock.blocks.info.plain`).
 OBJ_LABEL, OBJ_INFO = "# interlock label ", "# interlock info "
-#: GLB scene extras and 3MF model metadata of :func:`~interlock.gallery.export.export`: the labels, as
-#: ``{block name: [kind, text]}``, and ``Assembly.info`` as JSON.
+#: GLB scene extras, 3MF model metadata and PLY comments of :func:`~interlock.gallery.export.export`: the
+#: labels, as ``{block name: [kind, text]}``, and ``Assembly.info`` as JSON.
 LABELS_KEY, INFO_KEY = "interlock_labels", "interlock_info"
 #: glTF 2.0 says +Y is up; interlock's gravity is along -Z.  This rotation turns glTF coordinates into
 #: interlock's, ``(x, y, z) -> (x, -z, y)``: reading applies it to every node, writing its inverse (transpose),
@@ -145,6 +146,15 @@ def json_value(text):
         return json.loads(text or "")
     except ValueError:
         return None
+
+
+def stored_labels(pairs) -> dict:
+    """``{block name: label}`` from the ``{block name: [kind, text]}`` a file stores (:data:`LABELS_KEY`); pairs
+    that are not as :func:`~interlock.blocks.labels.label_text` writes them (a file edited by hand) are left out,
+    and so is all of ``pairs`` if it is not such a dict."""
+    if not isinstance(pairs, dict):
+        return {}
+    return {name: label_from_text(*pair) for name, pair in pairs.items() if is_label_pair(pair)}
 
 
 def is_label_pair(value) -> bool:

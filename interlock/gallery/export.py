@@ -38,7 +38,7 @@ FORMATS = {
             "'# interlock label [kind, text]'; '# interlock blocks=N fixed=K triangles=T' and '# interlock info "
             "{...}'; class colours in a .mtl file beside it",
     ".ply": "binary PLY; one mesh, per-face 'block' index, 'fixed' flag and class colour; "
-            "'comment interlock blocks=N fixed=K'; no labels",
+            "'comment interlock blocks=N fixed=K', the labels and the info as JSON comments",
     ".glb": "binary glTF, +Y up as glTF says (interlock's z is glTF's y); one node per block, 'block_0007' or "
             "'block_0007 fixed', one mesh per block type and class, class colours; 'interlock blocks=N fixed=K', "
             "the labels and the info in the scene extras",
@@ -56,7 +56,7 @@ FORMATS = {
 
 #: The formats that keep the blocks' labels and ``Assembly.info`` (:mod:`interlock.blocks.labels`); the others
 #: keep the blocks and the frame, and the labels come back as ``"<file name>:block_0007"``.
-LABELLED_FORMATS = (".obj", ".glb", ".3mf", ".3dm", ".json")
+LABELLED_FORMATS = (".obj", ".ply", ".glb", ".3mf", ".3dm", ".json")
 
 #: The most blocks an STL file can tell apart: block indices in the triangles' 2-byte attribute.  Up to
 #: :data:`~interlock.blocks.meshfiles.STL_MAX_FRAMED` blocks the top bit of the attribute carries the
@@ -313,6 +313,7 @@ def _write_ply(assembly: Assembly, path: Path):
         face_records[channel] = colours[:, k]
     header = "\n".join([
         "ply", "format binary_little_endian 1.0", f"comment {_header(assembly)}",
+        f"comment {LABELS_KEY} {_json(_labels(assembly))}", f"comment {INFO_KEY} {_json(plain(assembly.info))}",
         f"element vertex {len(vertices)}", "property double x", "property double y", "property double z",
         f"element face {len(faces)}", "property list uchar int vertex_indices", f"property int {BLOCK_DATA}",
         f"property uchar {FIXED_DATA}",
