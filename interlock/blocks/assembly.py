@@ -516,16 +516,17 @@ def _checked_meshes(meshes, names) -> tuple[trimesh.Trimesh, ...]:
         split = split_t_junctions(vertices, np.vstack([faces[k] for k in open_meshes]), TJUNCTION_RTOL, vertex_mesh)
         split = split[np.argsort(vertex_mesh[split[:, 0]], kind="stable")]
         ends = np.searchsorted(vertex_mesh[split[:, 0]], open_meshes, side="right")
+        still = vertex_mesh[unmatched_edges(split)[:, 0]]  # the meshes open also after the split, per edge
+        still_open = set(still.tolist())
         for k, own in zip(open_meshes.tolist(), np.split(split, ends[:-1])):
-            still = unmatched_edges(own)
-            if still.size:  # triangles twice or wound the other way round: the same solid, once repaired
+            if k in still_open:  # triangles twice or wound the other way round: the same solid, once repaired
                 wound = consistently_wound(meshes[k].vertices, own - offsets[k])
                 if wound is None:
                     raise AssemblyError(
-                        f"{names[k]} is not a closed surface ({len(still)} edges without a matching opposite edge, "
-                        "also after splitting edges at the vertices on them, dropping repeated triangles and "
-                        "making the winding consistent): it has holes or loose triangles; blocks must be closed "
-                        "polyhedra")
+                        f"{names[k]} is not a closed surface ({np.count_nonzero(still == k)} edges without a "
+                        "matching opposite edge, also after splitting edges at the vertices on them, dropping "
+                        "repeated triangles and making the winding consistent): it has holes or loose triangles; "
+                        "blocks must be closed polyhedra")
                 own = wound + offsets[k]
             faces[k] = own
             meshes[k] = trimesh.Trimesh(meshes[k].vertices, own - offsets[k], process=False)

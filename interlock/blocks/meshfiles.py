@@ -17,7 +17,7 @@ import trimesh
 from interlock.blocks.meshformat import (BLOCK_DATA, FIXED_DATA, FIXED_WORD, GLTF_SUFFIXES, GLTF_TO_Z_UP, HEADER_MARKER,
                                          INFO_KEY, LABELS_KEY, OBJ_INFO, OBJ_LABEL, OBJ_SECOND_LINE, STL_FIXED_BIT,
                                          STL_MAX_FRAMED, STL_RECORD, MeshFile, header_counts, file_header, flagged_name,
-                                         json_value, named_frame, stored_labels, touching_bodies)
+                                         json_value, named_frame, stored_meaning, touching_bodies)
 from interlock.blocks.objfile import obj_file
 from interlock.blocks.repair import group_meshes, split_t_junctions, unmatched_edges, unrepeated
 from interlock.errors import AssemblyError
@@ -310,18 +310,16 @@ def _ply_triangles(path: Path):
     """Vertices, faces, block and fixed flag per face, the header, and the labels (by block name) and info of
     the JSON comments :data:`LABELS_KEY` and :data:`INFO_KEY`, of a marked PLY; None without the comment."""
     with open(path, "rb") as file:
-        header = file.read(4096).split(b"end_header", 1)[0]
-        marker = re.search(rb"^comment (" + re.escape(HEADER_MARKER) + rb".*)$", header, re.MULTILINE)
+        start = file.read(4096)
+        marker = re.search(rb"^comment (" + re.escape(HEADER_MARKER) + rb".*)$", start.split(b"end_header", 1)[0],
+                           re.MULTILINE)
         if marker is None:
             return None
-        file.seek(0)
-        header = _ply_header(file)
+        header = _ply_header(file, start)
         file.seek(0)
         loaded = trimesh.exchange.ply.load_ply(file)
-    stored = {key: json_value(value) for key, value in
-              re.findall(rb"^comment (" + LABELS_KEY.encode() + b"|" + INFO_KEY.encode() + rb") (.*)$", header,
-                         re.MULTILINE)}
-    labels, info = stored_labels(stored.get(LABELS_KEY.encode())), stored.get(INFO_KEY.encode())
+    labels, info = stored_meaning({key.decode(): json_value(value) for key, value in re.findall(
+        rb"^comment (" + LABELS_KEY.encode() + b"|" + INFO_KEY.encode() + rb") (.*)$", header, re.MULTILINE)})
     announced = header_counts(marker.group(1))
     if announced is None:
         raise AssemblyError(f"{path} says it holds interlock blocks but not how many ({marker.group(1)[:40]!r})")
@@ -330,13 +328,13 @@ def _ply_triangles(path: Path):
     if BLOCK_DATA not in names:
         raise AssemblyError(f"{path} says it holds interlock blocks but has no face property {BLOCK_DATA!r}")
     fixed = properties[FIXED_DATA] if FIXED_DATA in names else None
-    return (loaded["vertices"], loaded["faces"], properties[BLOCK_DATA], fixed, announced, labels,
-            info if isinstance(info, dict) else None)
+    return loaded["vertices"], loaded["faces"], properties[BLOCK_DATA], fixed, announced, labels, info
 
 
-def _ply_header(file) -> bytes:
-    """A PLY file's header, up to ``end_header`` (its JSON comments may make it long)."""
-    header = b""
+def _ply_header(file, start: bytes) -> bytes:
+    """A PLY file's header, up to ``end_header``, from its first bytes ``start`` on (read on from ``file``: its
+    JSON comments may make it long)."""
+    header = start
     while b"end_header" not in header:
         chunk = file.read(1 << 20)
         if not chunk:
@@ -413,10 +411,8 @@ def _scene_header(path: Path, scene) -> tuple | None:
 
 
 def _scene_meaning(path: Path, scene) -> tuple[dict, dict | None]:
-    """The labels (by block name) and the info that a GLB (scene extras) or 3MF (model metadata) file stores.
-
-    What is not as :func:`~interlock.gallery.export.export` writes it (a file edited by hand) is left out.
-    """
+    """The labels (by block name) and the info that a GLB (scene extras) or 3MF (model metadata) file stores
+    (:func:`~interlock.blocks.meshformat.stored_meaning`)."""
     if path.suffix.lower() == ".3mf":
         stored = {}
         with zipfile.ZipFile(path) as package:
@@ -429,7 +425,6 @@ def _scene_meaning(path: Path, scene) -> tuple[dict, dict | None]:
                         stored[element.get("name").partition(":")[2]] = json_value(element.text)
     else:
         stored = scene.metadata if isinstance(scene.metadata, dict) else {}
-    info = stored.get(INFO_KEY)
-    return stored_labels(stored.get(LABELS_KEY)), info if isinstance(info, dict) else None
+    return stored_meaning(stored)
 
 

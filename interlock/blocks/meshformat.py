@@ -22,7 +22,7 @@ from interlock.blocks.labels import label_from_text
 from interlock.errors import AssemblyError
 
 __all__ = ["MeshFile", "file_header", "header_counts", "flagged_name", "named_frame", "touching_bodies", "json_value",
-           "is_label_pair", "stored_labels", "HEADER_MARKER", "STL_RECORD", "BLOCK_DATA", "FIXED_DATA", "FIXED_WORD",
+           "is_label_pair", "stored_meaning", "HEADER_MARKER", "STL_RECORD", "BLOCK_DATA", "FIXED_DATA", "FIXED_WORD",
            "STL_FIXED_BIT", "STL_MAX_FRAMED", "OBJ_SECOND_LINE", "OBJ_LABEL", "OBJ_INFO", "LABELS_KEY", "INFO_KEY",
            "GLTF_TO_Z_UP", "GLTF_SUFFIXES"]
 
@@ -148,13 +148,15 @@ def json_value(text):
         return None
 
 
-def stored_labels(pairs) -> dict:
-    """``{block name: label}`` from the ``{block name: [kind, text]}`` a file stores (:data:`LABELS_KEY`); pairs
-    that are not as :func:`~interlock.blocks.labels.label_text` writes them (a file edited by hand) are left out,
-    and so is all of ``pairs`` if it is not such a dict."""
-    if not isinstance(pairs, dict):
-        return {}
-    return {name: label_from_text(*pair) for name, pair in pairs.items() if is_label_pair(pair)}
+def stored_meaning(stored: dict) -> tuple[dict, dict | None]:
+    """``({block name: label}, info)`` from what a GLB, 3MF or PLY file stores under :data:`LABELS_KEY` (a
+    ``{block name: [kind, text]}`` dict) and :data:`INFO_KEY` (a dict).  What is not as
+    :func:`~interlock.gallery.export.export` writes it (a file edited by hand) is left out: a pair that is not
+    one, a value that is not a dict."""
+    pairs, info = stored.get(LABELS_KEY), stored.get(INFO_KEY)
+    labels = {name: label_from_text(*pair) for name, pair in pairs.items() if is_label_pair(pair)} \
+        if isinstance(pairs, dict) else {}
+    return labels, info if isinstance(info, dict) else None
 
 
 def is_label_pair(value) -> bool:

@@ -70,18 +70,18 @@ def obj_file(path: Path) -> tuple[MeshFile, bool]:
                             "read; a block is a closed surface of faces")
     blocks, _, triangles = obj.announced or (None, None, None)
     face_object, object_names = obj.polygon_object[polygon], obj.object_names
-    if len(object_names) == 1 and _closed_groups_apart(obj.vertices, faces, obj.polygon_group[polygon]):
+    by_group = len(object_names) == 1 and _closed_groups_apart(obj.vertices, faces, obj.polygon_group[polygon])
+    if by_group:
         face_object, object_names = obj.polygon_group[polygon], obj.group_names
     objects = np.unique(face_object)
     if triangles is not None and triangles != len(faces):
         raise AssemblyError(f"{path} is cut short or damaged: it announces {blocks} blocks of {triangles} "
                             f"triangles in all, it holds {len(objects)} objects of {len(faces)} triangles")
     names, fixed = zip(*(flagged_name(object_names[k]) for k in objects.tolist()))
+    labels = {} if by_group else {name: label_from_text(*obj.object_labels[k])  # the objects' OBJ_LABEL lines
+                                  for name, k in zip(names, objects.tolist()) if k in obj.object_labels}
     if len(objects) > 1:  # one block per object, in file order
         meshes = group_meshes(obj.vertices, faces, np.searchsorted(objects, face_object))
-        labels = {} if object_names is obj.group_names else {
-            name: label_from_text(*obj.object_labels[k]) for name, k in zip(names, objects.tolist())
-            if k in obj.object_labels}
         return MeshFile(names, tuple(meshes), named_frame(path, fixed, obj.announced), blocks, labels, obj.info), True
     closed, separated = _separate(obj.vertices, faces, obj.vertex_run)
     frame = named_frame(path, fixed, obj.announced)
@@ -90,8 +90,7 @@ def obj_file(path: Path) -> tuple[MeshFile, bool]:
     if closed is None:
         mesh = group_meshes(obj.vertices, faces, np.zeros(len(faces), dtype=int))[0]
         name = names[0] if names and names[0] else "body0"
-        pair = obj.object_labels.get(int(objects[0])) if object_names is obj.object_names else None
-        labels = {} if pair is None else {name: label_from_text(*pair)}
+        labels = {name: labels[names[0]]} if names[0] in labels else {}
         return MeshFile((name,), (mesh,), frame, blocks, labels, obj.info), separated
     meshes = group_meshes(*closed)
     frame = None if frame is None else tuple(range(len(meshes))) if frame else ()  # bodies of one object
