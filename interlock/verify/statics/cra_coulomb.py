@@ -67,6 +67,7 @@ from scipy.optimize import Bounds, LinearConstraint, milp
 from interlock.verify.statics.equilibrium import clarabel_lp, clarabel_solve
 
 __all__ = ["COULOMB_ITERATIONS", "COULOMB_DAMPING", "COULOMB_MEMORY", "THRESHOLD_RTOL", "SHUT_TOL", "SHUT_RESIDUAL",
+           "STUCK_ROUNDS", "bound_blocks",
            "TrescaSolution", "FixedPoint", "tresca", "coulomb_fixed_point", "shut_nearly_closed", "unbalanced",
            "describe"]
 
@@ -82,6 +83,9 @@ COULOMB_MEMORY = 3
 SHUT_TOL = 1e-5
 #: ... when the exact LP with slack leaves at most this fraction of the load unbalanced at the motion.
 SHUT_RESIDUAL = 1e-6
+#: Rounds in a row with the same blocks at the bound ``eta`` after which the large route stops the fixed point
+#: and holds those blocks out (:mod:`~interlock.verify.statics.cra_split`).
+STUCK_ROUNDS = 5
 #: Thresholds below this fraction of the largest are taken as 0 (no friction there).  Interior-point forces
 #: leave thousands of vertices at the solver's tolerance (1e-10 of the largest); a cone each for them took
 #: Clarabel 44 iterations on the armadillo vault where 24 do without (3.6 s -> 1.8 s a round).  A block whose
@@ -130,6 +134,9 @@ class FixedPoint:
         That residual, a fraction of the load (``None`` if no round's motion stayed within the bounds of (11)).
     unbalanced_blocks : tuple of int
         The free blocks (assembly indices) the closest motion leaves unbalanced.
+    at_bound : tuple of int
+        The free blocks that slid to the bound ``eta`` in the last round (:func:`bound_blocks`): those that
+        (T) cannot hold, where :mod:`~interlock.verify.statics.cra_split` takes over.
     """
 
     found: tuple | None
@@ -137,6 +144,7 @@ class FixedPoint:
     closest: np.ndarray | None
     residual: float | None
     unbalanced_blocks: tuple
+    at_bound: tuple = ()
 
 
 def tresca(problem, b_eq, thresholds, stiffness: float) -> TrescaSolution | None:
@@ -203,7 +211,7 @@ def tresca(problem, b_eq, thresholds, stiffness: float) -> TrescaSolution | None
 
 def coulomb_fixed_point(problem, b_eq, normal_forces, check, iterations: int = COULOMB_ITERATIONS,
                         damping: float = COULOMB_DAMPING, memory: int = COULOMB_MEMORY, time_limit: float = np.inf,
-                        progress=None):
+                        progress=None, stuck: int | None = None):
     """Iterate (T) towards Coulomb's law (module docstring) and return a :class:`FixedPoint`.
 
     Parameters
@@ -223,6 +231,9 @@ def coulomb_fixed_point(problem, b_eq, normal_forces, check, iterations: int = C
         in time.
     progress : callable, optional
         Called with ``"Coulomb fixed point, round k"`` as each round starts.
+    stuck : int, optional
+        Stop once the same blocks have slid to the bound ``eta`` (:func:`bound_blocks`) in this many rounds
+        in a row: (T) cannot hold them (the armadillo's block 238 from round 3 on, in every round after).
 
     Returns
     -------
@@ -237,7 +248,7 @@ def coulomb_fixed_point(problem, b_eq, normal_forces, check, iterations: int = C
     stiffness = float(np.abs(b_eq).sum()) / max(s, 1)
     thresholds = _floored(radius * np.maximum(normal_forces, 0.0))
     history: list[tuple[np.ndarray, np.ndarray]] = []  # (thresholds, step) of the last rounds
-    closest, best, blocks, rounds, pace = None, None, (), 0, 0.0
+    closest, best, blocks, rounds, pace, at_bound, repeats = None, None, (), 0, 0.0, (), 0
     while rounds < iterations and time.perf_counter() - started + pace < time_limit:
         begun = time.perf_counter()
         rounds += 1
@@ -249,6 +260,8 @@ def coulomb_fixed_point(problem, b_eq, normal_forces, check, iterations: int = C
         forces = check(solved.motion)
         if forces is not None:
             return FixedPoint((solved.motion, forces), rounds, solved.motion, 0.0, ())
+        before, at_bound = at_bound, bound_blocks(problem, solved.motion) if solved.eta_active else ()
+        repeats = repeats + 1 if at_bound and at_bound == before else 1
         residual, unbalanced_at = unbalanced(problem, b_eq, solved.motion)
         if closest is None or (residual is not None and (best is None or residual < best)):
             closest, best, blocks = solved.motion, residual, unbalanced_at
@@ -257,11 +270,42 @@ def coulomb_fixed_point(problem, b_eq, normal_forces, check, iterations: int = C
             forces = None if shut is None else check(shut)
             if forces is not None:
                 return FixedPoint((shut, forces), rounds, shut, 0.0, ())
+        if stuck is not None and at_bound and repeats >= stuck:
+            break
         step = radius * np.maximum(solved.forces[:, 0], 0.0) - thresholds
         history = (history + [(thresholds, step)])[-(memory + 1):]
         thresholds = _floored(_anderson(history, damping))
         pace = time.perf_counter() - begun
-    return FixedPoint(None, rounds, closest, best, blocks)
+    return FixedPoint(None, rounds, closest, best, blocks, at_bound)
+
+
+def bound_blocks(problem, motion) -> tuple:
+    """The free blocks (assembly indices) that account for the displacements at the bound ``eta`` of
+    ``motion``: fewest blocks touching every contact with a component at the bound (greedy: the block in most
+    such contacts first; between blocks in as many, the one that moved most).
+
+    A block that (T) cannot hold slides until ``eta`` stops it, at each of its contacts; its neighbours have
+    one such contact each.  On the armadillo the 8 components at the bound lie in contacts 228-238 and
+    238-343, and the answer is ``(238,)``.
+    """
+    system = problem.system
+    dd = (problem.kinematic @ motion).reshape(-1, 3)
+    at = np.flatnonzero((np.abs(dd) >= problem.ratio * (1 - 1e-6)).any(axis=1))
+    pairs = {(system.contacts[c].i, system.contacts[c].j) for c in np.unique(system.vertex_contact[at])}
+    moved = dict(zip(system.free.tolist(), np.linalg.norm(motion.reshape(-1, 6), axis=1)))
+    chosen = []
+    while pairs:
+        counts: dict[int, int] = {}
+        for pair in pairs:
+            for k in pair:
+                if k in moved:
+                    counts[k] = counts.get(k, 0) + 1
+        if not counts:
+            break
+        block = max(counts, key=lambda k: (counts[k], moved[k]))
+        chosen.append(block)
+        pairs = {pair for pair in pairs if block not in pair}
+    return tuple(sorted(chosen))
 
 
 def _floored(thresholds: np.ndarray) -> np.ndarray:

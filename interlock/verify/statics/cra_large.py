@@ -33,7 +33,7 @@ import time
 import numpy as np
 import scipy.sparse as sp
 
-from interlock.verify.statics import cra_local
+from interlock.verify.statics import cra_coulomb, cra_ipopt, cra_local, cra_split
 from interlock.verify.statics.equilibrium import clarabel_lp
 
 __all__ = ["LARGE_VERTICES", "CHECK_RTOL", "most_work", "exact", "interior_forces", "holds", "carries",
@@ -141,10 +141,19 @@ def decide_large(problem, b_eq, binaries: int, timings: dict, time_limit: float 
     coulomb = ""
     if found is None:
         frugal = cra_local.least_friction(problem, b_eq, interior=True)
-        result, coulomb = cra_local.coulomb_route(problem, b_eq, frugal, lambda m: exact(problem, b_eq, m),
-                                                  progress, time_limit=time_limit - (time.perf_counter() - started))
+        result, coulomb, fixed_point = cra_local.coulomb_route(
+            problem, b_eq, frugal, lambda m: exact(problem, b_eq, m), progress,
+            time_limit=time_limit - (time.perf_counter() - started),
+            stuck=cra_coulomb.STUCK_ROUNDS if cra_ipopt.available() else None)
         if result is not None:
             found = (*result, coulomb)
+        elif fixed_point is not None and 0 < len(fixed_point.at_bound) <= cra_split.SPLIT_MOST_BLOCKS:
+            result, split = cra_split.split_route(problem, b_eq, fixed_point.at_bound, exact, time_limit=time_limit,
+                                                  progress=progress)
+            if result is not None:
+                found = (*result, split)
+            else:
+                coulomb = f"{coulomb}; {split}"
     if found is not None:
         timings["lp"] = timings.get("lp", 0.0) + time.perf_counter() - started
         motion, forces, how = found

@@ -61,8 +61,8 @@ def last_resort(problem, b_eq, rbe_forces, most_work, timings, progress=None, fr
     given, is told as each solver starts; ``frugal``: the least-friction equilibrium when already known.
     """
     frugal = least_friction(problem, b_eq) if frugal is None else frugal
-    found, coulomb = coulomb_route(problem, b_eq, frugal, lambda motion: problem.exact(b_eq, motion),
-                                   progress=progress)
+    found, coulomb, _ = coulomb_route(problem, b_eq, frugal, lambda motion: problem.exact(b_eq, motion),
+                                      progress=progress)
     if found is not None:
         return found, coulomb
     settled = settled_motion(problem, b_eq)
@@ -93,16 +93,18 @@ def last_resort(problem, b_eq, rbe_forces, most_work, timings, progress=None, fr
 
 
 def coulomb_route(problem, b_eq, frugal, check, progress=None, **options):
-    """``((motion, forces), how)`` of the Coulomb fixed point started from the least-friction equilibrium
-    ``frugal`` (:func:`least_friction`; ``None`` if there is none), each motion judged by ``check``, or
-    ``(None, why not)`` naming what its closest motion leaves unbalanced.  ``options``: ``iterations``,
-    ``time_limit`` of :func:`~interlock.verify.statics.cra_coulomb.coulomb_fixed_point`."""
+    """``((motion, forces), how, fixed_point)`` of the Coulomb fixed point started from the least-friction
+    equilibrium ``frugal`` (:func:`least_friction`; ``None`` if there is none), each motion judged by ``check``,
+    or ``(None, why not, fixed_point)`` naming what its closest motion leaves unbalanced (``fixed_point``: the
+    :class:`~interlock.verify.statics.cra_coulomb.FixedPoint`, ``None`` if it did not start).  ``options``:
+    ``iterations``, ``time_limit`` of :func:`~interlock.verify.statics.cra_coulomb.coulomb_fixed_point`."""
     if frugal is None:
-        return None, "the Coulomb fixed point did not start (no least-friction equilibrium)"
+        return None, "the Coulomb fixed point did not start (no least-friction equilibrium)", None
     fixed_point = cra_coulomb.coulomb_fixed_point(problem, b_eq, frugal[:, 0], check, progress=progress, **options)
     if fixed_point.found is not None:
-        return fixed_point.found, f"the Coulomb fixed point ({fixed_point.rounds} convex frictional-contact solves)"
-    return None, cra_coulomb.describe(fixed_point)
+        return (fixed_point.found, f"the Coulomb fixed point ({fixed_point.rounds} convex frictional-contact solves)",
+                fixed_point)
+    return None, cra_coulomb.describe(fixed_point), fixed_point
 
 
 def verify_local(problem, b_eq, motion, forces):

@@ -1,0 +1,299 @@
+"""Blocks the Coulomb fixed point cannot hold: prove the rest without them, then place them (a decomposition of (11)).
+
+The Coulomb fixed point (:mod:`~interlock.verify.statics.cra_coulomb`) finds
+motions that *settle* under the load.  A block held only by friction in a wedge
+that narrows upwards (the Armadillo vault's block 238) needs a squeeze, a
+self-stress through its neighbours, which no settling motion carries: round
+after round it slides out until the bound ``eta`` stops it
+(:func:`~interlock.verify.statics.cra_coulomb.bound_blocks` names it).  Problem
+(11) allows the squeeze; this module looks for it where it lives, around those
+few blocks ``H``, with the rest ``R`` held at a proved motion.
+
+1. **The rest.**  (11) without the blocks ``H`` (their rows and every vertex
+   touching them removed, :func:`without_blocks`) is solved by the Coulomb fixed
+   point and the exact LP: a motion ``q_R`` and forces that balance ``R``.
+2. **The held-out blocks, placed.**  With ``q_R`` fixed, (11) for ``H`` alone is
+   small: their twists ``q_H``, and ``(f_n, alpha)`` at their vertices ``V``,
+   with ``dd_V = G q_H + d_0`` (``d_0``: what ``q_R`` moves them by),
+   equilibrium ``A_H f = b_H``, the pyramid, ``f_t = -alpha dd_t``,
+   ``0 <= f_n`` and ``dd_n + 1 >= 0`` with ``f_n (dd_n + 1) = 0``.  IPOPT solves
+   it (CasADi, optional) with Scholtes' relaxation ``f_n (dd_n + 1) <= tau``,
+   ``tau`` lowered to 1e-8 (:data:`SCHOLTES`), from seeded random starts.  The
+   vertices it leaves within :data:`SHUT_TOLS` of closed are shut exactly (least
+   squares in ``q_H``), and (11) for ``H`` at that motion must hold (an LP).
+3. **The whole, checked.**  At ``q = (q_R, q_H)`` the least ``|A_eq f - b|_1``
+   over the forces (11) allows (HiGHS) is found.  Zero sends ``q`` to the exact
+   LP of the whole: **stable**, whatever found it.  Otherwise the rest cannot
+   carry what ``H`` puts on it, and the LP's dual ``y`` says so: for every force
+   ``f_V`` at ``H``'s vertices that the rest can carry at ``q_R`` (its rows:
+   ``A_R f_R + E f_V = b_R``), ``y_R^T (b_R - E f_V) <= 0``, a linear cut on
+   ``f_V`` (a Benders feasibility cut; it removes every force that balances ``H``
+   at the rejected ``q_H``).  Step 2 runs again with the cuts, up to
+   :data:`SPLIT_ROUNDS` times.
+
+On the armadillo vault (399 blocks, ``H = (238,)``): the rest is proved in 14
+rounds, and the third placement is accepted by the exact LP of the whole
+(docs/statics.md, "CRA at scale").  Nothing here can say "unstable": a failure
+is "inconclusive".
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import replace
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.optimize import linprog
+
+from interlock.verify.statics import cra_ipopt, cra_local
+from interlock.verify.statics.cra_local import ACTIVE_TOL, SLIDE_TOL
+from interlock.verify.statics.equilibrium import friction_matrix
+
+__all__ = ["SPLIT_MOST_BLOCKS", "SPLIT_ROUNDS", "SPLIT_ATTEMPTS", "SCHOLTES", "FRICTION_MARGIN", "SHUT_TOLS",
+           "without_blocks", "split_route", "place_blocks"]
+
+#: Most blocks held out: more would make step 2 a large nonconvex problem again.
+SPLIT_MOST_BLOCKS = 3
+#: Most placements checked against the rest (each the whole's slack LP, 4-20 s on the armadillo), and most IPOPT
+#: solves (about 1 s each; a failed one is followed by a new random start), before "inconclusive".
+SPLIT_ROUNDS = 8
+SPLIT_ATTEMPTS = 40
+#: Scholtes' relaxation: ``f_n (dd_n + 1) <= tau`` for these ``tau`` in turn, each solve warm started.
+SCHOLTES = (1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-8)
+#: IPOPT places the blocks with friction at most ``1 - FRICTION_MARGIN`` of the pyramid's (the exact LP, after the
+#: shut, allows all of it).
+FRICTION_MARGIN = 0.1
+#: Vertices of a placement within these distances of closed (units of ``eps``) are shut, the least first.
+SHUT_TOLS = (1e-8, 1e-6, 1e-4)
+
+
+def without_blocks(problem, blocks):
+    """``(rest, rows, vertices)``: (11) without the free blocks ``blocks`` (assembly indices), and the masks of
+    the rows of ``b_eq`` (6 per free block) and of the contact vertices it keeps.
+
+    The rest has the same units as ``problem`` (forces over the whole's weight, motions over ``eps``), so its
+    load is ``b_eq[rows]``.  A vertex touching a held-out block goes with it, whichever side it is on.
+
+    Examples
+    --------
+    Three cubes stacked on a fixed one; without the top one, the two below keep one contact each.
+
+    >>> import numpy as np, trimesh
+    >>> from interlock.blocks import Assembly
+    >>> from interlock.verify.statics.cra import CRAProblem
+    >>> cubes = [trimesh.creation.box(bounds=[[0, 0, z], [1, 1, z + 1]]) for z in range(4)]
+    >>> problem = CRAProblem.build(Assembly.from_meshes(cubes, frame=[0]), 0.5)
+    >>> rest, rows, vertices = without_blocks(problem, (3,))
+    >>> rest.system.free.tolist(), int(rows.sum()), int(vertices.sum()), len(rest.system.contacts)
+    ([1, 2], 12, 8, 2)
+    """
+    system = problem.system
+    rows, kept_contacts = _kept(problem, blocks)
+    vertices = kept_contacts[system.vertex_contact]
+    held = ~rows[::6]
+    columns = np.repeat(vertices, 3)
+    a_eq = system.a_eq[rows][:, columns].tocsr()
+    renumbered = np.cumsum(kept_contacts) - 1
+    rest_system = replace(
+        system, a_eq=a_eq, a_ub=friction_matrix(int(vertices.sum()), system.cone_rows), cost=system.cost[columns],
+        bounds=system.bounds[columns], weights=system.weights[~held], arms=system.arms[~held],
+        free=system.free[~held], frames=system.frames[vertices], points=system.points[vertices],
+        vertex_contact=renumbered[system.vertex_contact[vertices]],
+        contacts=tuple(c for c, kept in zip(system.contacts, kept_contacts) if kept))
+    return replace(problem, system=rest_system, kinematic=a_eq.T.tocsr()), rows, vertices
+
+
+def split_route(problem, b_eq, blocks, exact, time_limit: float = np.inf, progress=None, seed: int = 0):
+    """``((motion, forces), how)`` solving (11) for the whole, found by holding ``blocks`` out (module
+    docstring), or ``(None, why not)``.
+
+    ``exact(problem, b_eq, motion)`` is the exact LP (forces or ``None``), used for the rest and for the whole;
+    ``time_limit`` bounds the rest's Coulomb fixed point, and then the placements (seconds each); ``seed``
+    the placements' random starts;
+    ``progress(words)``, if given, is told as each stage starts.
+    """
+    blocks = tuple(int(k) for k in blocks)
+    held = f"block{'s' if len(blocks) > 1 else ''} {', '.join(map(str, blocks))}"
+    if not cra_ipopt.available():
+        return None, f"holding out {held} needs IPOPT ({cra_ipopt.MISSING_MESSAGE})"
+    if progress is not None:
+        progress(f"the rest, without {held}")
+    rest, rows, _ = without_blocks(problem, blocks)
+    b_rest = b_eq[rows]
+    frugal = cra_local.least_friction(rest, b_rest, interior=True)
+    proved, how, _ = cra_local.coulomb_route(rest, b_rest, frugal, lambda m: exact(rest, b_rest, m),
+                                             progress=progress, time_limit=time_limit)
+    if proved is None:
+        return None, f"holding out {held}: the rest is not proved either ({how})"
+    motion = np.zeros(problem.kinematic.shape[1])
+    motion[rows] = proved[0]
+    found, words = place_blocks(problem, b_eq, blocks, motion, exact, time_limit, progress, seed)
+    return found, f"holding out {held} ({how} for the rest; {words})"
+
+
+def place_blocks(problem, b_eq, blocks, motion, exact, time_limit: float = np.inf, progress=None, seed: int = 0):
+    """``((motion, forces), how)``: ``motion`` with the free blocks ``blocks`` placed so that (11) holds for the
+    whole (steps 2 and 3 of the module docstring), or ``(None, why not)``.
+
+    ``motion`` (solver units, every free block) is held fixed except at ``blocks``; it should be a proved motion
+    of the rest (:func:`without_blocks`).  ``exact``, ``time_limit`` (seconds for the placements), ``progress``
+    and ``seed`` as for :func:`split_route`.
+    """
+    rows, kept_contacts = _kept(problem, blocks)
+    placement = _Placement.build(problem, b_eq, motion, rows, ~kept_contacts[problem.system.vertex_contact])
+    b_rest = b_eq[rows]
+    rng = np.random.default_rng(seed)
+    named = f"block{'s' if len(blocks) > 1 else ''} {', '.join(map(str, blocks))}"
+    start, cuts, checked, attempt, began = None, [], 0, 0, time.perf_counter()
+    while attempt < SPLIT_ATTEMPTS and checked < SPLIT_ROUNDS and time.perf_counter() - began <= time_limit:
+        attempt += 1
+        if progress is not None:
+            progress(f"placing {named}, attempt {attempt}")
+        x, solved = placement.solve(placement.random_start(rng) if start is None else start, cuts)
+        placed = placement.shut(x) if solved else None  # IPOPT's failures violate the cuts
+        start = None if placed is None else x  # a new random start, or on from here with one cut more
+        if placed is None:
+            continue
+        checked += 1
+        candidate = motion.copy()
+        candidate[placement.dofs] = placed
+        residual, dual = _slack(problem, b_eq, candidate)
+        if residual is None:
+            start = None
+            continue
+        if residual <= 1e-9 * float(np.abs(b_eq).sum()):
+            forces = exact(problem, b_eq, candidate)
+            if forces is not None:
+                return (candidate, forces), f"placed by IPOPT: {attempt} solves, {checked} checked against the rest"
+        cuts.append(placement.cut(dual[rows], b_rest))
+    return None, (f"none of the {checked} placements checked against the rest ({attempt} IPOPT solves) was "
+                  f"carried by it")
+
+
+def _kept(problem, blocks):
+    """Masks of the rows of ``b_eq`` (6 per free block) and of the contacts that do not involve ``blocks``."""
+    system = problem.system
+    ends = np.array([[c.i, c.j] for c in system.contacts]).reshape(-1, 2)
+    return np.repeat(~np.isin(system.free, blocks), 6), ~np.isin(ends, blocks).any(axis=1)
+
+
+def _slack(problem, b_eq, motion):
+    """``(residual, y)``: the least ``|A_eq f - b|_1`` over the forces (11) allows at ``motion`` (HiGHS) and
+    its dual on the equilibrium rows; ``(None, None)`` if the motion leaves the bounds or HiGHS fails."""
+    lp = problem.motion_lp(motion)
+    if lp is None:
+        return None, None
+    m, n = lp.a_eq.shape
+    identity = sp.eye(m, format="csr")
+    outcome = linprog(np.concatenate([np.zeros(n), np.ones(2 * m)]),
+                      A_ub=sp.hstack([lp.a_ub, sp.csr_matrix((lp.a_ub.shape[0], 2 * m))], format="csr"),
+                      b_ub=np.zeros(lp.a_ub.shape[0]), A_eq=sp.hstack([lp.a_eq, identity, -identity], format="csr"),
+                      b_eq=b_eq, bounds=(0, None), method="highs")
+    if outcome.status != 0:
+        return None, None
+    return float(outcome.fun), np.asarray(outcome.eqlin.marginals)
+
+
+class _Placement:
+    """(11) for the held-out blocks with the rest's motion fixed (module docstring, step 2), in the held-out
+    blocks' load units (forces over ``|b_H|_1``)."""
+
+    def __init__(self, kinematic, offset, a_held, b_held, carry, cone_rows, ratio, dofs):
+        self.kinematic, self.offset, self.a_held, self.cone_rows = kinematic, offset, a_held, cone_rows
+        self.scale = float(np.abs(b_held).sum()) or 1.0
+        self.b_held, self.carry, self.ratio, self.dofs = b_held / self.scale, carry, ratio, dofs
+        self.count = len(offset) // 3
+
+    @classmethod
+    def build(cls, problem, b_eq, motion, rows, vertices):
+        dofs = np.flatnonzero(~rows)
+        columns = np.flatnonzero(np.repeat(vertices, 3))
+        d = problem.kinematic.tocsr()[columns]
+        fixed = motion.copy()
+        fixed[dofs] = 0.0
+        a_eq = problem.system.a_eq.tocsr()[:, columns]
+        return cls(d[:, dofs].toarray(), d @ fixed, a_eq[dofs].toarray(), b_eq[dofs], a_eq[rows],
+                   problem.system.cone_rows, problem.ratio, dofs)
+
+    def random_start(self, rng):
+        n = self.count
+        return np.concatenate([rng.normal(0.0, self.ratio / 10, len(self.dofs)), np.full(n, 0.1), np.full(n, 1e-3)])
+
+    def solve(self, start, cuts):
+        """``(x, solved)``: IPOPT's point ``(q_H, f_n, alpha)`` after the Scholtes stages, from ``start``."""
+        import casadi as ca
+
+        n, k = self.count, len(self.dofs)
+        x = ca.MX.sym("x", k + 2 * n)
+        q, normal, alpha = x[:k], x[k:k + n], x[k + n:]
+        dd = ca.mtimes(ca.DM(self.kinematic), q) + ca.DM(self.offset)
+        gap, friction_u, friction_v = dd[0::3] + 1, -alpha * dd[1::3], -alpha * dd[2::3]
+        a = self.a_held
+        balance = (ca.mtimes(ca.DM(a[:, 0::3]), normal) + ca.mtimes(ca.DM(a[:, 1::3]), friction_u)
+                   + ca.mtimes(ca.DM(a[:, 2::3]), friction_v) - ca.DM(self.b_held))
+        # a pyramid narrowed by FRICTION_MARGIN: a placement at the real cone's limit rarely survives the shut
+        pyramid = [(1 - FRICTION_MARGIN) * row[0] * normal + row[1] * friction_u + row[2] * friction_v
+                   for row in self.cone_rows]
+        cut_rows = [self.scale * (ca.dot(ca.DM(w[0::3]), normal) + ca.dot(ca.DM(w[1::3]), friction_u)
+                                  + ca.dot(ca.DM(w[2::3]), friction_v)) - bound for w, bound in cuts]
+        tau = ca.MX.sym("tau")
+        constraints = ca.vertcat(balance, gap, *pyramid, normal * gap - tau, dd, *cut_rows)
+        sides = len(self.cone_rows)
+        lower = np.concatenate([np.zeros(k + n), np.full((sides + 1) * n, -np.inf), np.full(3 * n, -self.ratio),
+                                np.full(len(cuts), -np.inf)])
+        upper = np.concatenate([np.zeros(k), np.full(n, np.inf), np.zeros((sides + 1) * n), np.full(3 * n, self.ratio),
+                                np.zeros(len(cuts))])
+        solver = ca.nlpsol("placement", "ipopt", {"x": x, "f": ca.sum1(normal), "g": constraints, "p": tau},
+                           {"ipopt.print_level": 0, "print_time": 0, "ipopt.sb": "yes",
+                            "ipopt.max_iter": cra_ipopt.IPOPT_ITERATIONS // 2, "ipopt.tol": 1e-10})
+        point = start
+        for relaxation in SCHOLTES:
+            point = np.asarray(solver(x0=point, p=relaxation, lbg=lower, ubg=upper,
+                                      lbx=np.concatenate([np.full(k, -np.inf), np.zeros(2 * n)]))["x"]).ravel()
+        return point, solver.stats()["return_status"] in ("Solve_Succeeded", "Solved_To_Acceptable_Level")
+
+    def shut(self, x):
+        """``q_H`` with the vertices IPOPT nearly closed shut exactly (least squares), the first of
+        :data:`SHUT_TOLS` at which (11) for the held-out blocks holds; ``None`` if none does."""
+        q = x[:len(self.dofs)]
+        rows = self.kinematic[0::3]
+        gap = rows @ q + self.offset[0::3] + 1.0
+        for tolerance in SHUT_TOLS:
+            near = gap <= tolerance
+            if near.any():
+                shut = q + np.linalg.lstsq(rows[near], -gap[near], rcond=None)[0]
+                if self.holds(shut):
+                    return shut
+        return None
+
+    def holds(self, q) -> bool:
+        """Whether (11) for the held-out blocks has a solution at ``q_H`` (an LP, the exact LP's tolerances)."""
+        dd = (self.kinematic @ q + self.offset).reshape(-1, 3)
+        if dd[:, 0].min() < -1.0 - 1e-6 or np.abs(dd).max() > self.ratio * (1 + 1e-6):
+            return False
+        closed = dd[:, 0] + 1.0 <= ACTIVE_TOL
+        sliding = closed & (np.hypot(dd[:, 1], dd[:, 2]) > SLIDE_TOL)
+        a = self.a_held
+        slides = a[:, 1::3][:, sliding] * dd[sliding, 1] + a[:, 2::3][:, sliding] * dd[sliding, 2]
+        columns = np.column_stack([a[:, 0::3][:, closed], -slides])
+        if not columns.size:
+            return False
+        c, s = int(closed.sum()), int(sliding.sum())
+        where = np.cumsum(closed)[sliding] - 1
+        pyramid = np.zeros((len(self.cone_rows) * s, c + s))
+        for k, row in enumerate(self.cone_rows):
+            pyramid[k * s + np.arange(s), where] = row[0]
+            pyramid[k * s + np.arange(s), c + np.arange(s)] = -(row[1] * dd[sliding, 1] + row[2] * dd[sliding, 2])
+        outcome = linprog(np.concatenate([np.ones(c), np.zeros(s)]), A_ub=pyramid if s else None,
+                          b_ub=np.zeros(len(pyramid)) if s else None, A_eq=columns, b_eq=self.b_held,
+                          bounds=(0, None), method="highs")
+        return outcome.status == 0
+
+    def cut(self, y_rest, b_rest):
+        """The Benders cut ``y_R^T (b_R - E f_V) <= 0`` as ``(w, bound)``: ``w . f_V <= bound`` (``f_V`` in the
+        whole's units), normalised to ``max |w| scale = 1``."""
+        w = -(self.carry.T @ y_rest)
+        bound = -float(y_rest @ b_rest)
+        size = float(np.abs(w).max()) * self.scale
+        return (w / size, bound / size) if size > 0 else (w, bound)
