@@ -192,7 +192,7 @@ def cra(assembly, mu: float, density: float = 1.0, gravity=(0.0, 0.0, -1.0), fra
         sides: int = DEFAULT_SIDES, eps: float = DEFAULT_EPS, eta: float = DEFAULT_ETA,
         sectors: int = DEFAULT_SECTORS, force_bound: float = DEFAULT_FORCE_BOUND,
         min_slide: float = DEFAULT_MIN_SLIDE, time_limit: float = DEFAULT_TIME_LIMIT, contacts=None,
-        backend: str = "milp", progress=None) -> CRAResult:
+        backend: str = "milp", progress=None, hold_out: bool = False) -> CRAResult:
     """Coupled rigid-block analysis: is there an equilibrium that a virtual motion realises? (CRA paper, (11)).
 
     Forces ``f`` at the contact vertices and a virtual motion ``dq`` of the
@@ -228,7 +228,7 @@ def cra(assembly, mu: float, density: float = 1.0, gravity=(0.0, 0.0, -1.0), fra
         Seconds per MILP; a MILP that runs out of time gives "inconclusive".  On models past
         :data:`~interlock.verify.statics.cra_large.LARGE_VERTICES` contact vertices (no MILP), the
         seconds for the whole answer: the Coulomb fixed point starts no round that would, at the pace of
-        the one before, end later (the armadillo vault without block 238 needs about 80 s).
+        the one before, end later (the armadillo vault without block 238 needs about 50 s).
     backend : {"milp", "compas_cra"}
         "milp" decides as above.  "compas_cra" (the optional upstream package, for assemblies too
         large for the MILP) asks its local solver for a motion and verifies it with the exact LP:
@@ -237,6 +237,13 @@ def cra(assembly, mu: float, density: float = 1.0, gravity=(0.0, 0.0, -1.0), fra
     progress : callable, optional
         Called with a few words as each stage starts ("RBE", "the motion of most work",
         "Coulomb fixed point, round 3", "MILP with 4 sectors", ...); the CLI shows them.
+    hold_out : bool
+        On large models, when the Coulomb fixed point cannot hold a few blocks (they slide to the bound
+        ``eta`` round after round), prove the rest without them and place them
+        (:mod:`~interlock.verify.statics.cra_split`; needs IPOPT, ``pip install "interlock[nlp]"``).
+        Each stage has ``time_limit``: on the armadillo vault about 150 s in all.  Off by default:
+        the placements depend on random starts (seeded), and on the armadillo they found the certificate
+        in one run of five (docs/statics.md, "CRA at scale").
 
     Returns
     -------
@@ -268,7 +275,7 @@ def cra(assembly, mu: float, density: float = 1.0, gravity=(0.0, 0.0, -1.0), fra
         return problem.check_upstream(assembly, gravity)
     if backend != "milp":
         raise StabilityError(f"backend must be 'milp' or 'compas_cra', got {backend!r}")
-    return problem.solve(gravity, sectors, time_limit, progress=progress)
+    return problem.solve(gravity, sectors, time_limit, progress=progress, hold_out=hold_out)
 
 
 def decider(assembly, mu: float, sectors: int = DEFAULT_SECTORS, time_limit: float = DEFAULT_TIME_LIMIT,
@@ -330,7 +337,8 @@ class CRAProblem:
 
     # --- the whole decision -----------------------------------------------------------------------------------
 
-    def solve(self, gravity: np.ndarray, sectors: int, time_limit: float, known=(), progress=None) -> CRAResult:
+    def solve(self, gravity: np.ndarray, sectors: int, time_limit: float, known=(), progress=None,
+              hold_out: bool = False) -> CRAResult:
         progress = progress or _silent
         timings = {**self.system.timings, "milp": 0.0, "lp": 0.0}
         b_eq, total = self._right_hand_side(gravity)
@@ -344,7 +352,7 @@ class CRAProblem:
             timings["lp"] += time.perf_counter() - started
             status, forces, motion, message = cra_large.decide_large(
                 self, b_eq, len(self.system.points) * (1 + sectors), timings,
-                time_limit - (time.perf_counter() - started), progress)
+                time_limit - (time.perf_counter() - started), progress, hold_out)
             parameters = {**self.parameters, "sectors": tried, "gravity": gravity.tolist(), "route": "large"}
             return self._result(status, message, None if forces is None else forces * total, motion, parameters,
                                 timings)

@@ -112,11 +112,13 @@ def carries(problem, b_eq, closed: np.ndarray) -> bool | None:
     return True if status == "Solved" else False if status == "PrimalInfeasible" else None
 
 
-def decide_large(problem, b_eq, binaries: int, timings: dict, time_limit: float = np.inf, progress=None):
+def decide_large(problem, b_eq, binaries: int, timings: dict, time_limit: float = np.inf, progress=None,
+                 hold_out: bool = False):
     """``(status, forces, motion, message)`` for a large model (see the module docstring); forces in units of
     the free blocks' weight, the motion in units of ``eps``.  ``binaries``: the MILP's size, for the message;
-    ``time_limit``: seconds from the call within which the Coulomb fixed point's rounds end; ``progress(words)``,
-    if given, is told as each stage starts."""
+    ``time_limit``: seconds from the call within which the Coulomb fixed point's rounds end (and then each stage
+    of holding blocks out); ``progress(words)``, if given, is told as each stage starts; ``hold_out``: hold out
+    the blocks the fixed point cannot hold (:mod:`~interlock.verify.statics.cra_split`), else name them."""
     started = time.perf_counter()
     if progress is not None:
         progress("the motion of most work")
@@ -144,16 +146,21 @@ def decide_large(problem, b_eq, binaries: int, timings: dict, time_limit: float 
         result, coulomb, fixed_point = cra_local.coulomb_route(
             problem, b_eq, frugal, lambda m: exact(problem, b_eq, m), progress,
             time_limit=time_limit - (time.perf_counter() - started),
-            stuck=cra_coulomb.STUCK_ROUNDS if cra_ipopt.available() else None)
+            stuck=cra_coulomb.STUCK_ROUNDS if hold_out and cra_ipopt.available() else None)
+        held = () if fixed_point is None else fixed_point.at_bound
         if result is not None:
             found = (*result, coulomb)
-        elif fixed_point is not None and 0 < len(fixed_point.at_bound) <= cra_split.SPLIT_MOST_BLOCKS:
-            result, split = cra_split.split_route(problem, b_eq, fixed_point.at_bound, exact, time_limit=time_limit,
+        elif hold_out and 0 < len(held) <= cra_split.SPLIT_MOST_BLOCKS:
+            result, split = cra_split.split_route(problem, b_eq, held, exact, time_limit=time_limit,
                                                   progress=progress)
             if result is not None:
                 found = (*result, split)
             else:
                 coulomb = f"{coulomb}; {split}"
+        elif 0 < len(held) <= cra_split.SPLIT_MOST_BLOCKS:
+            coulomb = (f"{coulomb}; block{'s' if len(held) > 1 else ''} {', '.join(map(str, held))} slid to the "
+                       f"bound eta in its last round: cra(..., hold_out=True) proves the rest without "
+                       f"{'them' if len(held) > 1 else 'it'} and then places {'them' if len(held) > 1 else 'it'}")
     if found is not None:
         timings["lp"] = timings.get("lp", 0.0) + time.perf_counter() - started
         motion, forces, how = found

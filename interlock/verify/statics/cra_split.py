@@ -50,7 +50,7 @@ from interlock.verify.statics import cra_ipopt, cra_local
 from interlock.verify.statics.cra_local import ACTIVE_TOL, SLIDE_TOL
 from interlock.verify.statics.equilibrium import friction_matrix
 
-__all__ = ["SPLIT_MOST_BLOCKS", "SPLIT_ROUNDS", "SPLIT_ATTEMPTS", "SCHOLTES", "FRICTION_MARGIN", "SHUT_TOLS",
+__all__ = ["SPLIT_MOST_BLOCKS", "SPLIT_ROUNDS", "SPLIT_ATTEMPTS", "SCHOLTES", "PLACEMENT_ITERATIONS", "SHUT_TOLS",
            "without_blocks", "split_route", "place_blocks"]
 
 #: Most blocks held out: more would make step 2 a large nonconvex problem again.
@@ -61,9 +61,8 @@ SPLIT_ROUNDS = 8
 SPLIT_ATTEMPTS = 40
 #: Scholtes' relaxation: ``f_n (dd_n + 1) <= tau`` for these ``tau`` in turn, each solve warm started.
 SCHOLTES = (1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-8)
-#: IPOPT places the blocks with friction at most ``1 - FRICTION_MARGIN`` of the pyramid's (the exact LP, after the
-#: shut, allows all of it).
-FRICTION_MARGIN = 0.1
+#: Most IPOPT iterations per Scholtes stage.
+PLACEMENT_ITERATIONS = 600
 #: Vertices of a placement within these distances of closed (units of ``eps``) are shut, the least first.
 SHUT_TOLS = (1e-8, 1e-6, 1e-4)
 
@@ -129,7 +128,7 @@ def split_route(problem, b_eq, blocks, exact, time_limit: float = np.inf, progre
     motion = np.zeros(problem.kinematic.shape[1])
     motion[rows] = proved[0]
     found, words = place_blocks(problem, b_eq, blocks, motion, exact, time_limit, progress, seed)
-    return found, f"holding out {held} ({how} for the rest; {words})"
+    return found, f"holding out {held} (the rest proved by {how}; {words})"
 
 
 def place_blocks(problem, b_eq, blocks, motion, exact, time_limit: float = np.inf, progress=None, seed: int = 0):
@@ -151,8 +150,8 @@ def place_blocks(problem, b_eq, blocks, motion, exact, time_limit: float = np.in
         if progress is not None:
             progress(f"placing {named}, attempt {attempt}")
         x, solved = placement.solve(placement.random_start(rng) if start is None else start, cuts)
-        placed = placement.shut(x) if solved else None  # IPOPT's failures violate the cuts
-        start = None if placed is None else x  # a new random start, or on from here with one cut more
+        placed = placement.shut(x)  # IPOPT's "infeasible" point may still balance the held-out blocks
+        start = x if solved and placed is not None else None  # on from here with one cut more, or a new start
         if placed is None:
             continue
         checked += 1
@@ -232,9 +231,7 @@ class _Placement:
         a = self.a_held
         balance = (ca.mtimes(ca.DM(a[:, 0::3]), normal) + ca.mtimes(ca.DM(a[:, 1::3]), friction_u)
                    + ca.mtimes(ca.DM(a[:, 2::3]), friction_v) - ca.DM(self.b_held))
-        # a pyramid narrowed by FRICTION_MARGIN: a placement at the real cone's limit rarely survives the shut
-        pyramid = [(1 - FRICTION_MARGIN) * row[0] * normal + row[1] * friction_u + row[2] * friction_v
-                   for row in self.cone_rows]
+        pyramid = [row[0] * normal + row[1] * friction_u + row[2] * friction_v for row in self.cone_rows]
         cut_rows = [self.scale * (ca.dot(ca.DM(w[0::3]), normal) + ca.dot(ca.DM(w[1::3]), friction_u)
                                   + ca.dot(ca.DM(w[2::3]), friction_v)) - bound for w, bound in cuts]
         tau = ca.MX.sym("tau")
@@ -246,7 +243,7 @@ class _Placement:
                                 np.zeros(len(cuts))])
         solver = ca.nlpsol("placement", "ipopt", {"x": x, "f": ca.sum1(normal), "g": constraints, "p": tau},
                            {"ipopt.print_level": 0, "print_time": 0, "ipopt.sb": "yes",
-                            "ipopt.max_iter": cra_ipopt.IPOPT_ITERATIONS // 2, "ipopt.tol": 1e-10})
+                            "ipopt.max_iter": PLACEMENT_ITERATIONS, "ipopt.tol": 1e-10})
         point = start
         for relaxation in SCHOLTES:
             point = np.asarray(solver(x0=point, p=relaxation, lbg=lower, ubg=upper,
