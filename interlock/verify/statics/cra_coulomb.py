@@ -52,7 +52,9 @@ of its LP; Clarabel's interior solution of the same LP left 2e-4 unbalanced).
 The iteration need not converge; where it does (shelf-stable, Fig. 12), it
 proves "stable" with linear and conic solves only. On the Armadillo vault
 it proves the 398 blocks other than block 238 stable in 14 rounds, but not
-the whole vault: see docs/statics.md, "CRA at scale".
+the whole vault, where 238 slides to the bound ``eta`` in every round from the
+third (:func:`bound_blocks`; :mod:`~interlock.verify.statics.cra_split` holds it
+out): see docs/statics.md, "CRA at scale".
 """
 
 from __future__ import annotations

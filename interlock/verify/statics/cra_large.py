@@ -22,7 +22,11 @@ are out of reach, and HiGHS' simplex takes about a minute per LP.  Here:
 3. The Coulomb fixed point (:mod:`interlock.verify.statics.cra_coulomb`): convex
    frictional-contact problems whose solutions solve (11) once the friction
    thresholds obey Coulomb's law, each motion checked by :func:`exact`.
-4. Otherwise "inconclusive", saying what was tried and why the exact routes do
+4. With ``hold_out=True``, when the fixed point keeps sliding the same few
+   blocks to the bound ``eta``: the rest proved without them, then they are
+   placed (:mod:`interlock.verify.statics.cra_split`); else the message names
+   them.
+5. Otherwise "inconclusive", saying what was tried and why the exact routes do
    not reach the model, with the size of the MILP it would take.
 """
 
