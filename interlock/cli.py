@@ -163,9 +163,10 @@ def _parser() -> argparse.ArgumentParser:
                            help="cra: seconds per MILP before local solvers get the last word and an undecided "
                                 "answer is 'inconclusive'; on large models (no MILP), seconds for the whole "
                                 "answer (default 60)")
-    stability.add_argument("--hold-out", action="store_true",
-                           help="cra on large models: prove the rest without the blocks that slide to the bound "
-                                "eta, then place them (needs interlock[nlp]; each stage gets --time-limit)")
+    stability.add_argument("--no-hold-out", dest="hold_out", action="store_false",
+                           help="cra on large models: do not prove the rest without the blocks that slide to the "
+                                "bound eta and then place them (the default; needs interlock[nlp], each stage "
+                                "gets --time-limit); stop at the Coulomb fixed point and name them")
     stability.add_argument("--contacts", default="interfaces", choices=("interfaces", "exact"),
                            help="interfaces: faces that meet across small gaps and tilts, relative to each block "
                                 "pair's thickness (default); exact: faces that touch")
@@ -415,11 +416,11 @@ def _run_stability(args) -> int:
                              "e.g. --fixed 0,1; without supports nothing can carry the weight")
     if args.time_limit is not None and args.method != "cra":
         raise InterlockError("--time-limit applies to --method cra only (rbe is one LP)")
-    if args.hold_out and args.method != "cra":
-        raise InterlockError("--hold-out applies to --method cra only")
+    if not args.hold_out and args.method != "cra":
+        raise InterlockError("--no-hold-out applies to --method cra only")
     cra_options = {} if args.time_limit is None else {"time_limit": args.time_limit}
-    if args.hold_out:
-        cra_options["hold_out"] = True
+    if not args.hold_out:
+        cra_options["hold_out"] = False
     found = args.contacts
     if args.interfaces is not None:
         from interlock.verify.statics import compas_interfaces

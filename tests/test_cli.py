@@ -231,7 +231,7 @@ def test_stability_cra_says_model_h_falls_where_rbe_holds_it(capsys, reference_d
     assert main(["stability", str(model_h), "--mu", "0.84", "--method", "cra"]) == 0
     assert capsys.readouterr().out.startswith("CRA unstable (mu 0.84")
     # holding blocks out is for large models that the Coulomb fixed point cannot settle: H's answer is the MILP's
-    assert main(["stability", str(model_h), "--mu", "0.84", "--method", "cra", "--hold-out"]) == 0
+    assert main(["stability", str(model_h), "--mu", "0.84", "--method", "cra", "--no-hold-out"]) == 0
     assert capsys.readouterr().out.startswith("CRA unstable (mu 0.84")
 
 
@@ -240,7 +240,7 @@ def test_stability_cra_says_model_h_falls_where_rbe_holds_it(capsys, reference_d
     (["--mu", "-1", "--method", "cra"], "mu must be a finite number >= 0"),
     (["--mu", "0.5", "--tilt-axis", "1,x,0"], "expected comma-separated numbers"),
     (["--mu", "0.5", "--time-limit", "5"], "--time-limit applies to --method cra only"),
-    (["--mu", "0.5", "--hold-out"], "--hold-out applies to --method cra only"),
+    (["--mu", "0.5", "--no-hold-out"], "--no-hold-out applies to --method cra only"),
     (["--mu", "0.5", "--method", "cra", "--time-limit", "0"], "time_limit must be a finite number > 0"),
 ])
 def test_stability_bad_input_is_one_line(reference_data, argv, message):

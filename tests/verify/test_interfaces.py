@@ -164,26 +164,32 @@ def test_armadillo_rbe_stable_with_default_options(vault):
     assert result.friction_utilisation <= 1 / math.cos(math.pi / 8) + 1e-4  # the octagon's corners, no artefact
 
 
-def test_armadillo_cra_documented_result(vault):
+def test_armadillo_cra_is_stable_by_holding_block_238_out(vault):
     # docs/statics.md, "CRA at scale": RBE stable (necessary); the motion of most work is not exact (eta is
-    # active); the Coulomb fixed point cannot hold block 238 (it slides to the bound eta round after round) and
-    # the message names it, with the option that holds it out (cra_split). Inconclusive, saying why, or stable
-    # with a certificate; never "unstable"
+    # active); the Coulomb fixed point cannot hold block 238 (it slides to the bound eta round after round), so
+    # the large route holds it out: the other 398 blocks are proved, then 238 is placed by IPOPT with Benders
+    # cuts, and the exact LP of the whole accepts the motion. The certificate passes the independent check of (11)
     from tests.verify.test_cra import _certificate_holds
 
     assembly, found = vault
     result = cra(assembly, 0.84, contacts=found)
-    assert result.status in ("stable", "inconclusive")
     assert result.parameters.get("route") == "large"
-    if result.status == "stable":  # a certificate: the forces and motion satisfy (11), checked exactly
-        _certificate_holds(assembly, result, (0.0, 0.0, -1.0))
-    else:
-        # why (RBE is only necessary; the motion of most work fails), and how long the proof would take
-        assert "RBE has an equilibrium" in result.message and "binaries" in result.message
-        assert "2,424 s" in result.message  # the paper's IPOPT time for this vault (Table 5)
-        # the Coulomb fixed point's nearest motion: what it leaves unbalanced, and where
-        assert "the Coulomb fixed point ran" in result.message and "of the load unbalanced, at" in result.message
-        assert "block 238 slid to the bound eta" in result.message and "hold_out=True" in result.message
+    assert result.status == "stable", result.message
+    assert "holding out block 238" in result.message and "placed by IPOPT" in result.message
+    _certificate_holds(assembly, result, (0.0, 0.0, -1.0))
+
+
+def test_armadillo_cra_without_holding_out_names_block_238(vault):
+    # hold_out=False stops at the Coulomb fixed point: inconclusive, saying why (RBE is only necessary, the
+    # motion of most work fails, what the closest motion leaves unbalanced), how large the MILP would be, the
+    # paper's time, and the block that slides to eta with the option that holds it out; never "unstable"
+    assembly, found = vault
+    result = cra(assembly, 0.84, contacts=found, hold_out=False, time_limit=30)
+    assert result.status == "inconclusive" and result.parameters.get("route") == "large"
+    assert "RBE has an equilibrium" in result.message and "binaries" in result.message
+    assert "2,424 s" in result.message  # the paper's IPOPT time for this vault (Table 5)
+    assert "the Coulomb fixed point ran" in result.message and "of the load unbalanced, at" in result.message
+    assert "block 238 slid to the bound eta" in result.message and "hold_out=True" in result.message
 
 
 def test_armadillo_is_cra_stable_by_its_certificate(vault):
