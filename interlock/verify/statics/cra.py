@@ -227,8 +227,9 @@ def cra(assembly, mu: float, density: float = 1.0, gravity=(0.0, 0.0, -1.0), fra
     time_limit : float
         Seconds per MILP; a MILP that runs out of time gives "inconclusive".  On models past
         :data:`~interlock.verify.statics.cra_large.LARGE_VERTICES` contact vertices (no MILP), the
-        seconds for the whole answer: the Coulomb fixed point starts no round that would, at the pace of
-        the one before, end later (the armadillo vault without block 238 needs about 50 s).
+        seconds for each stage: the Coulomb fixed point starts no round that would, at the pace of
+        the one before, end later (the armadillo vault without block 238 needs about 50 s), and with
+        ``hold_out`` the rest's fixed point and the placements get as long again each.
     backend : {"milp", "compas_cra"}
         "milp" decides as above.  "compas_cra" (the optional upstream package, for assemblies too
         large for the MILP) asks its local solver for a motion and verifies it with the exact LP:
