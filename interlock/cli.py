@@ -164,9 +164,9 @@ def _parser() -> argparse.ArgumentParser:
                                 "answer is 'inconclusive'; on large models (no MILP), seconds for the whole "
                                 "answer (default 60)")
     stability.add_argument("--no-hold-out", dest="hold_out", action="store_false",
-                           help="cra on large models: do not prove the rest without the blocks that slide to the "
-                                "bound eta and then place them (the default; needs interlock[nlp], each stage "
-                                "gets --time-limit); stop at the Coulomb fixed point and name them")
+                           help="cra on large models: stop at the Coulomb fixed point and name the blocks that "
+                                "slide to the bound eta, instead of proving the rest without them and then "
+                                "placing them (the default; needs interlock[nlp], each stage gets --time-limit)")
     stability.add_argument("--contacts", default="interfaces", choices=("interfaces", "exact"),
                            help="interfaces: faces that meet across small gaps and tilts, relative to each block "
                                 "pair's thickness (default); exact: faces that touch")
