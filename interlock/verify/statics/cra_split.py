@@ -47,7 +47,6 @@ import scipy.sparse as sp
 from scipy.optimize import linprog
 
 from interlock.verify.statics import cra_ipopt, cra_local
-from interlock.verify.statics.cra_local import ACTIVE_TOL, SLIDE_TOL
 from interlock.verify.statics.equilibrium import friction_matrix
 
 __all__ = ["SPLIT_MOST_BLOCKS", "SPLIT_ROUNDS", "SPLIT_ATTEMPTS", "SCHOLTES", "PLACEMENT_ITERATIONS", "SHUT_TOLS",
@@ -200,10 +199,12 @@ class _Placement:
     """(11) for the held-out blocks with the rest's motion fixed (module docstring, step 2), in the held-out
     blocks' load units (forces over ``|b_H|_1``)."""
 
-    def __init__(self, kinematic, offset, a_held, b_held, carry, cone_rows, ratio, dofs):
-        self.kinematic, self.offset, self.a_held, self.cone_rows = kinematic, offset, a_held, cone_rows
+    def __init__(self, problem, motion, vertices, kinematic, offset, a_held, b_held, carry, dofs):
+        self.problem, self.motion, self.vertices, self.dofs = problem, motion, vertices, dofs
+        self.kinematic, self.offset, self.a_held, self.carry = kinematic, offset, a_held, carry
+        self.cone_rows, self.ratio = problem.system.cone_rows, problem.ratio
         self.scale = float(np.abs(b_held).sum()) or 1.0
-        self.b_held, self.carry, self.ratio, self.dofs = b_held / self.scale, carry, ratio, dofs
+        self.b_held = b_held / self.scale
         self.count = len(offset) // 3
 
     @classmethod
@@ -214,8 +215,8 @@ class _Placement:
         fixed = motion.copy()
         fixed[dofs] = 0.0
         a_eq = problem.system.a_eq.tocsr()[:, columns]
-        return cls(d[:, dofs].toarray(), d @ fixed, a_eq[dofs].toarray(), b_eq[dofs], a_eq[rows],
-                   problem.system.cone_rows, problem.ratio, dofs)
+        return cls(problem, motion, vertices, d[:, dofs].toarray(), d @ fixed, a_eq[dofs].toarray(), b_eq[dofs],
+                   a_eq[rows], dofs)
 
     def random_start(self, rng):
         n = self.count
@@ -267,25 +268,20 @@ class _Placement:
         return None
 
     def holds(self, q) -> bool:
-        """Whether (11) for the held-out blocks has a solution at ``q_H`` (an LP, the exact LP's tolerances)."""
-        dd = (self.kinematic @ q + self.offset).reshape(-1, 3)
-        if dd[:, 0].min() < -1.0 - 1e-6 or np.abs(dd).max() > self.ratio * (1 + 1e-6):
+        """Whether (11) for the held-out blocks has a solution at ``q_H``: the rows and vertices of the held-out
+        blocks in ``CRAProblem.motion_lp`` of the whole at ``(q_R, q_H)`` (its tolerances and bounds), by HiGHS."""
+        whole = self.motion.copy()
+        whole[self.dofs] = q
+        lp = self.problem.motion_lp(whole)
+        if lp is None:
             return False
-        closed = dd[:, 0] + 1.0 <= ACTIVE_TOL
-        sliding = closed & (np.hypot(dd[:, 1], dd[:, 2]) > SLIDE_TOL)
-        a = self.a_held
-        slides = a[:, 1::3][:, sliding] * dd[sliding, 1] + a[:, 2::3][:, sliding] * dd[sliding, 2]
-        columns = np.column_stack([a[:, 0::3][:, closed], -slides])
-        if not columns.size:
+        columns = np.concatenate([self.vertices[lp.closed], self.vertices[lp.sliding]])
+        if not columns.any():
             return False
-        c, s = int(closed.sum()), int(sliding.sum())
-        where = np.cumsum(closed)[sliding] - 1
-        pyramid = np.zeros((len(self.cone_rows) * s, c + s))
-        for k, row in enumerate(self.cone_rows):
-            pyramid[k * s + np.arange(s), where] = row[0]
-            pyramid[k * s + np.arange(s), c + np.arange(s)] = -(row[1] * dd[sliding, 1] + row[2] * dd[sliding, 2])
-        outcome = linprog(np.concatenate([np.ones(c), np.zeros(s)]), A_ub=pyramid if s else None,
-                          b_ub=np.zeros(len(pyramid)) if s else None, A_eq=columns, b_eq=self.b_held * self.scale,
+        pyramid = lp.a_ub[np.repeat(self.vertices[lp.sliding], len(self.cone_rows))][:, columns]
+        outcome = linprog(lp.cost[columns], A_ub=pyramid if pyramid.shape[0] else None,
+                          b_ub=np.zeros(pyramid.shape[0]) if pyramid.shape[0] else None,
+                          A_eq=lp.a_eq[self.dofs][:, columns], b_eq=self.b_held * self.scale,
                           bounds=(0, None), method="highs")  # the whole's units, as its exact LP sees them
         return outcome.status == 0
 
