@@ -69,7 +69,7 @@ from scipy.optimize import Bounds, LinearConstraint, milp
 from interlock.verify.statics.equilibrium import clarabel_lp, clarabel_solve
 
 __all__ = ["COULOMB_ITERATIONS", "COULOMB_DAMPING", "COULOMB_MEMORY", "THRESHOLD_RTOL", "SHUT_TOL", "SHUT_RESIDUAL",
-           "STUCK_ROUNDS", "bound_blocks",
+           "STUCK_ROUNDS", "bound_blocks", "slack_lp",
            "TrescaSolution", "FixedPoint", "tresca", "coulomb_fixed_point", "shut_nearly_closed", "unbalanced",
            "describe"]
 
@@ -373,10 +373,8 @@ def unbalanced(problem, b_eq, motion):
     if lp is None:
         return None, ()
     n, m = lp.a_eq.shape[1], lp.a_eq.shape[0]
-    identity = sp.eye(m)
-    equalities = sp.hstack([lp.a_eq, identity, -identity])
-    inequalities = sp.vstack([sp.hstack([lp.a_ub, sp.csr_matrix((lp.a_ub.shape[0], 2 * m))]), -sp.eye(n + 2 * m)])
-    cost = np.concatenate([np.zeros(n), np.ones(2 * m)])
+    cost, equalities, inequalities = slack_lp(lp)
+    inequalities = sp.vstack([inequalities, -sp.eye(n + 2 * m)])
     solution = clarabel_lp(cost, sp.vstack([equalities, inequalities], format="csc"),
                            np.concatenate([b_eq, np.zeros(inequalities.shape[0])]), equalities=m)
     if str(solution.status) not in ("Solved", "AlmostSolved"):
@@ -386,6 +384,16 @@ def unbalanced(problem, b_eq, motion):
     scale = float(np.abs(b_eq).sum())
     blocks = np.asarray(problem.system.free)[per_block > BALANCED_RTOL * scale]
     return float(slack.sum()) / scale, tuple(int(k) for k in blocks)
+
+
+def slack_lp(lp):
+    """``(cost, a_eq, a_ub)`` of the least ``|A_eq f - b|_1`` over the forces (11) allows at a motion (``lp``: a
+    ``MotionLP``), in ``(x, s+, s-) >= 0``: ``a_eq = [A, I, -I]`` (right-hand side ``b``), ``a_ub = [A_ub, 0, 0]``
+    (right-hand side 0), ``cost = (0, 1, 1)``."""
+    n, m = lp.a_eq.shape[1], lp.a_eq.shape[0]
+    identity = sp.eye(m, format="csr")
+    return (np.concatenate([np.zeros(n), np.ones(2 * m)]), sp.hstack([lp.a_eq, identity, -identity], format="csr"),
+            sp.hstack([lp.a_ub, sp.csr_matrix((lp.a_ub.shape[0], 2 * m))], format="csr"))
 
 
 def describe(fixed_point: FixedPoint) -> str:

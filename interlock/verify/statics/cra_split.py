@@ -43,10 +43,9 @@ import time
 from dataclasses import replace
 
 import numpy as np
-import scipy.sparse as sp
 from scipy.optimize import linprog
 
-from interlock.verify.statics import cra_ipopt, cra_local
+from interlock.verify.statics import cra_coulomb, cra_ipopt, cra_local
 from interlock.verify.statics.equilibrium import friction_matrix
 
 __all__ = ["SPLIT_MOST_BLOCKS", "SPLIT_ROUNDS", "SPLIT_ATTEMPTS", "SCHOLTES", "PLACEMENT_ITERATIONS", "SHUT_TOLS",
@@ -184,12 +183,9 @@ def _slack(problem, b_eq, motion):
     lp = problem.motion_lp(motion)
     if lp is None:
         return None, None
-    m, n = lp.a_eq.shape
-    identity = sp.eye(m, format="csr")
-    outcome = linprog(np.concatenate([np.zeros(n), np.ones(2 * m)]),
-                      A_ub=sp.hstack([lp.a_ub, sp.csr_matrix((lp.a_ub.shape[0], 2 * m))], format="csr"),
-                      b_ub=np.zeros(lp.a_ub.shape[0]), A_eq=sp.hstack([lp.a_eq, identity, -identity], format="csr"),
-                      b_eq=b_eq, bounds=(0, None), method="highs")
+    cost, a_eq, a_ub = cra_coulomb.slack_lp(lp)
+    outcome = linprog(cost, A_ub=a_ub, b_ub=np.zeros(a_ub.shape[0]), A_eq=a_eq, b_eq=b_eq, bounds=(0, None),
+                      method="highs")
     if outcome.status != 0:
         return None, None
     return float(outcome.fun), np.asarray(outcome.eqlin.marginals)
