@@ -40,7 +40,7 @@ import scipy.sparse as sp
 from interlock.verify.statics import cra_coulomb, cra_ipopt, cra_local, cra_split
 from interlock.verify.statics.equilibrium import clarabel_lp
 
-__all__ = ["LARGE_VERTICES", "CHECK_RTOL", "most_work", "exact", "interior_forces", "holds", "carries",
+__all__ = ["LARGE_VERTICES", "CHECK_RTOL", "CHECKED_TOLERANCE", "most_work", "exact", "interior_forces", "holds", "carries",
            "decide_large"]
 
 #: Contact vertices above which :func:`~interlock.verify.statics.cra.cra` takes this route (the shelves of
@@ -50,6 +50,10 @@ LARGE_VERTICES = 2000
 #: (equilibrium, ``f_n >= 0``, ``alpha >= 0``, the friction pyramid) is at most this times the load
 #: (forces in units of the free blocks' weight): HiGHS' feasibility tolerance is 1e-7.
 CHECK_RTOL = 1e-7
+#: Clarabel's gap and feasibility tolerances for LPs whose solutions go to :func:`holds`: at its default, 1e-8,
+#: the slack LP's forces at the armadillo's certificate miss the equilibrium by 1.6 times :data:`CHECK_RTOL`; at
+#: 1e-10 they pass with 200 times to spare (0.6 s, two more iterations).
+CHECKED_TOLERANCE = 1e-10
 #: Closed vertices are those with ``dd_n + eps <= SNAP * eps`` in an interior-point motion (then made exact).
 SNAP = 1e-6
 

@@ -45,7 +45,7 @@ from dataclasses import replace
 import numpy as np
 from scipy.optimize import linprog
 
-from interlock.verify.statics import cra_coulomb, cra_ipopt, cra_local
+from interlock.verify.statics import cra_coulomb, cra_ipopt, cra_large, cra_local
 from interlock.verify.statics.equilibrium import friction_matrix
 
 __all__ = ["SPLIT_MOST_BLOCKS", "SPLIT_ROUNDS", "SPLIT_ATTEMPTS", "SCHOLTES", "PLACEMENT_ITERATIONS", "SHUT_TOLS",
@@ -55,7 +55,7 @@ __all__ = ["SPLIT_MOST_BLOCKS", "SPLIT_ROUNDS", "SPLIT_ATTEMPTS", "SCHOLTES", "P
 SPLIT_MOST_BLOCKS = 3
 #: Most placements checked against the rest (each the whole's slack LP, 4-20 s on the armadillo), and most IPOPT
 #: solves (about 1 s each; a failed one is followed by a new random start), before "inconclusive".
-SPLIT_ROUNDS = 8
+SPLIT_ROUNDS = 24
 SPLIT_ATTEMPTS = 40
 #: Scholtes' relaxation: ``f_n (dd_n + 1) <= tau`` for these ``tau`` in turn, each solve warm started.
 SCHOLTES = (1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-8)
@@ -157,15 +157,14 @@ def place_blocks(problem, b_eq, blocks, motion, time_limit: float = np.inf, prog
         checked += 1
         candidate = motion.copy()
         candidate[placement.dofs] = placed
-        residual, dual = _slack(problem, b_eq, candidate)
-        if residual is None:
+        least = cra_coulomb.least_unbalanced(problem, b_eq, candidate, tolerance=cra_large.CHECKED_TOLERANCE)
+        if least is None:
             start = None
             continue
-        if residual <= 1e-9 * float(np.abs(b_eq).sum()):
-            forces = problem.exact(b_eq, candidate)
-            if forces is not None:
-                return (candidate, forces), f"placed by IPOPT: {attempt} solves, {checked} checked against the rest"
-        cuts.append(placement.cut(dual[rows], b_rest))
+        if cra_large.holds(least.lp, least.x, b_eq):
+            return ((candidate, least.lp.forces(least.x)),
+                    f"placed by IPOPT: {attempt} solves, {checked} checked against the rest")
+        cuts.append(placement.cut(least.dual[rows], b_rest))
     return None, (f"none of the {checked} placements checked against the rest ({attempt} IPOPT solves) was "
                   f"carried by it")
 
@@ -175,20 +174,6 @@ def _kept(problem, blocks):
     system = problem.system
     ends = np.array([[c.i, c.j] for c in system.contacts]).reshape(-1, 2)
     return np.repeat(~np.isin(system.free, blocks), 6), ~np.isin(ends, blocks).any(axis=1)
-
-
-def _slack(problem, b_eq, motion):
-    """``(residual, y)``: the least ``|A_eq f - b|_1`` over the forces (11) allows at ``motion`` (HiGHS) and
-    its dual on the equilibrium rows; ``(None, None)`` if the motion leaves the bounds or HiGHS fails."""
-    lp = problem.motion_lp(motion)
-    if lp is None:
-        return None, None
-    cost, a_eq, a_ub = cra_coulomb.slack_lp(lp)
-    outcome = linprog(cost, A_ub=a_ub, b_ub=np.zeros(a_ub.shape[0]), A_eq=a_eq, b_eq=b_eq, bounds=(0, None),
-                      method="highs")
-    if outcome.status != 0:
-        return None, None
-    return float(outcome.fun), np.asarray(outcome.eqlin.marginals)
 
 
 class _Placement:

@@ -258,9 +258,10 @@ class EquilibriumSystem:
                                status, message, self.contacts, parameters, timings)
 
 
-def clarabel_lp(cost, constraints, right, equalities: int = 0):
+def clarabel_lp(cost, constraints, right, equalities: int = 0, tolerance: float | None = None):
     """Clarabel's interior point on ``min cost . x`` subject to ``constraints x = right`` on the first
     ``equalities`` rows and ``<= right`` on the rest; Clarabel's solution (``status``, ``x``, ``z``).
+    ``tolerance``: as for :func:`clarabel_solve`.
 
     The large LPs of statics go here (RBE above :data:`LARGE_LP` unknowns, CRA on large models): the
     armadillo's 31,000 unknowns in 0.7 s against 40 s for HiGHS' simplex.
@@ -273,20 +274,24 @@ def clarabel_lp(cost, constraints, right, equalities: int = 0):
 
     cones = ([clarabel.ZeroConeT(equalities)] if equalities else []) + \
         [clarabel.NonnegativeConeT(constraints.shape[0] - equalities)]
-    return clarabel_solve(None, cost, constraints, right, cones)
+    return clarabel_solve(None, cost, constraints, right, cones, tolerance)
 
 
-def clarabel_solve(quadratic, cost, constraints, right, cones):
+def clarabel_solve(quadratic, cost, constraints, right, cones, tolerance: float | None = None):
     """Clarabel on ``min x.Q x / 2 + cost . x`` subject to ``right - constraints x`` in ``cones`` (Clarabel's
     cone objects), quietly and on :data:`~interlock.verify.check.SOLVER_THREADS` threads; ``quadratic`` ``Q``
     may be ``None`` (an LP).  The one place the statics set Clarabel up (:func:`clarabel_lp`, and the cone
-    program of :func:`~interlock.verify.statics.cra_coulomb.tresca`)."""
+    program of :func:`~interlock.verify.statics.cra_coulomb.tresca`).  ``tolerance``, if given, replaces
+    Clarabel's gap and feasibility tolerances (1e-8 by default; solutions that must pass an exact check use
+    :data:`~interlock.verify.statics.cra_large.CHECKED_TOLERANCE`)."""
     import clarabel
 
     n = constraints.shape[1]
     settings = clarabel.DefaultSettings()
     settings.verbose = False
     settings.max_threads = SOLVER_THREADS
+    if tolerance is not None:
+        settings.tol_gap_abs = settings.tol_gap_rel = settings.tol_feas = tolerance
     quadratic = sp.csc_matrix((n, n)) if quadratic is None else sp.csc_matrix(quadratic)
     return clarabel.DefaultSolver(quadratic, np.asarray(cost, dtype=float), sp.csc_matrix(constraints),
                                   np.asarray(right, dtype=float), cones, settings).solve()
