@@ -160,7 +160,7 @@ def decide_large(problem, b_eq, binaries: int, timings: dict, time_limit: float 
             found = (*result, coulomb)
         elif hold_out and 0 < len(held) <= cra_split.SPLIT_MOST_BLOCKS:
             result, split = cra_split.split_route(problem, b_eq, held, exact, time_limit=time_limit,
-                                                  progress=progress)
+                                                  progress=progress, history=fixed_point.history)
             if result is not None:
                 found = (*result, split)
             else:

@@ -41,6 +41,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import replace
+from functools import partial
 
 import numpy as np
 from scipy.optimize import linprog
@@ -101,14 +102,18 @@ def without_blocks(problem, blocks):
     return replace(problem, system=rest_system, kinematic=a_eq.T.tocsr()), rows, vertices
 
 
-def split_route(problem, b_eq, blocks, exact, time_limit: float = np.inf, progress=None, seed: int = 0):
+def split_route(problem, b_eq, blocks, exact, time_limit: float = np.inf, progress=None, seed: int = 0,
+                history=()):
     """``((motion, forces), how)`` solving (11) for the whole, found by holding ``blocks`` out (module
     docstring), or ``(None, why not)``.
 
     ``exact(problem, b_eq, motion)`` is the exact LP (forces or ``None``) for the rest;
     ``time_limit`` bounds the rest's Coulomb fixed point, and then the placements (seconds each); ``seed``
     the placements' random starts;
-    ``progress(words)``, if given, is told as each stage starts.
+    ``progress(words)``, if given, is told as each stage starts;
+    ``history``: the whole's :attr:`~interlock.verify.statics.cra_coulomb.FixedPoint.history`, if the
+    Coulomb fixed point ran on it: the rest's continues from it (on the armadillo, 7 rounds where a fresh start
+    from the rest's least-friction equilibrium takes 14), else it starts afresh.
     """
     blocks = tuple(int(k) for k in blocks)
     held = f"block{'s' if len(blocks) > 1 else ''} {', '.join(map(str, blocks))}"
@@ -116,11 +121,21 @@ def split_route(problem, b_eq, blocks, exact, time_limit: float = np.inf, progre
         return None, f"holding out {held} needs IPOPT ({cra_ipopt.MISSING_MESSAGE})"
     if progress is not None:
         progress(f"the rest, without {held}")
-    rest, rows, _ = without_blocks(problem, blocks)
+    rest, rows, vertices = without_blocks(problem, blocks)
     b_rest = b_eq[rows]
-    frugal = cra_local.least_friction(rest, b_rest, interior=True)
-    proved, how, _ = cra_local.coulomb_route(rest, b_rest, frugal, lambda m: exact(rest, b_rest, m),
-                                             progress=progress, time_limit=time_limit)
+    check = partial(exact, rest, b_rest)
+    if history:
+        fixed_point = cra_coulomb.coulomb_fixed_point(
+            rest, b_rest, None, check, progress=progress, time_limit=time_limit,
+            history=[(thresholds[vertices], step[vertices]) for thresholds, step in history])
+        proved = fixed_point.found
+        how = (cra_coulomb.describe(fixed_point) if proved is None else
+               f"the Coulomb fixed point continued without {'them' if len(blocks) > 1 else 'it'} "
+               f"({fixed_point.rounds} more convex frictional-contact solves)")
+    else:
+        frugal = cra_local.least_friction(rest, b_rest, interior=True)
+        proved, how, _ = cra_local.coulomb_route(rest, b_rest, frugal, check, progress=progress,
+                                                 time_limit=time_limit)
     if proved is None:
         return None, f"holding out {held}: the rest is not proved either ({how})"
     motion = np.zeros(problem.kinematic.shape[1])
