@@ -3,8 +3,8 @@
 A motion of the blocks that *settles* under the load, with friction that
 resists every slide, realises an equilibrium the way (11) asks. This module
 finds such motions with convex problems. Nothing here proves anything by
-itself: every motion goes to the exact LP of (11) (``CRAProblem.exact``), and
-only that LP's "feasible" means "stable".
+itself: a motion is "stable" only if the exact LP of (11) (``CRAProblem.exact``)
+at it is feasible.
 
 **The convex problem (Tresca friction with elastic slip).** Fix a threshold
 ``s_v >= 0`` per contact vertex and a stiffness ``k > 0``. In the solver's
@@ -41,13 +41,16 @@ last ``memory`` rounds, ``gamma = argmin |g - dG gamma|`` and
 ``eta`` spoils the argument (its multipliers act as forces that (11) does not
 have): the exact LP then decides.
 
+Each round's motion first goes to the least ``|A_eq f - b|_1`` over the forces
+(11) allows at it (:func:`unbalanced`, one conic solve). Only a motion at which
+it leaves at most :data:`SHUT_RESIDUAL` of the load unbalanced goes to the exact
+LP (farther from 0 the exact LP is infeasible; this saves it in most rounds).
 Clarabel's motions close their vertices only to its tolerance, so a vertex
 loaded in (T) may sit at ``dd_n + 1 = 1e-6`` and count as open in the exact
-LP. A motion that the exact LP rejects, but at which it leaves at most
-:data:`SHUT_RESIDUAL` of the load unbalanced (:func:`unbalanced`), is checked
-again with the vertices within :data:`SHUT_TOL` of closed shut exactly
-(:func:`shut_nearly_closed`, the L1-nearest such motion by HiGHS: a vertex
-of its LP; Clarabel's interior solution of the same LP left 2e-4 unbalanced).
+LP. A motion that the exact LP rejects is checked again with the vertices
+within :data:`SHUT_TOL` of closed shut exactly (:func:`shut_nearly_closed`, the
+L1-nearest such motion by HiGHS: a vertex of its LP; Clarabel's interior
+solution of the same LP left 2e-4 unbalanced).
 
 The iteration need not converge; where it does (shelf-stable, Fig. 12), it
 proves "stable" with linear and conic solves only. On the Armadillo vault
@@ -273,16 +276,16 @@ def coulomb_fixed_point(problem, b_eq, normal_forces, check, iterations: int = C
         solved = tresca(problem, b_eq, thresholds, stiffness)
         if solved is None:
             break
-        forces = check(solved.motion)
-        if forces is not None:
-            return FixedPoint((solved.motion, forces), rounds, solved.motion, 0.0, ())
         before, at_bound = at_bound, bound_blocks(problem, solved.motion) if solved.eta_active else ()
         repeats = repeats + 1 if at_bound and at_bound == before else 1
         residual, unbalanced_at = unbalanced(problem, b_eq, solved.motion)
         if closest is None or (residual is not None and (best is None or residual < best)):
             closest, best, blocks = solved.motion, residual, unbalanced_at
-        if residual is not None and residual <= SHUT_RESIDUAL:  # nearly a solution: shut the nearly closed
-            shut = shut_nearly_closed(problem, solved.motion)  # vertices exactly
+        if residual is None or residual <= SHUT_RESIDUAL:  # nearly a solution (farther, the exact LP fails):
+            forces = check(solved.motion)  # the motion, then with its nearly closed vertices shut exactly
+            if forces is not None:
+                return FixedPoint((solved.motion, forces), rounds, solved.motion, 0.0, ())
+            shut = None if residual is None else shut_nearly_closed(problem, solved.motion)
             forces = None if shut is None else check(shut)
             if forces is not None:
                 return FixedPoint((shut, forces), rounds, shut, 0.0, ())
