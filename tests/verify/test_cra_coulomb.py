@@ -1,6 +1,7 @@
 """The Coulomb fixed point for CRA's problem (11) (interlock.verify.statics.cra_coulomb)."""
 
 import math
+from functools import partial
 
 import numpy as np
 import pytest
@@ -142,3 +143,49 @@ def test_progress_names_each_stage_and_round(reference_data):
     rounds = int(result.message.split("Coulomb fixed point (")[1].split()[0])
     assert stages[:2] == ["RBE", "quick answers"]
     assert stages[2:] == [f"Coulomb fixed point, round {k}" for k in range(1, rounds + 1)]
+
+
+def test_continuing_from_history_is_the_same_iteration(reference_data):
+    # Stopped after 5 rounds and continued from its Anderson memory (FixedPoint.history), the fixed point on
+    # shelf-stable takes the rounds the uninterrupted run takes after its fifth, to the same motion
+    assembly = load_compas(reference_data / "compas_cra" / "shelf-stable.json")
+    problem = CRAProblem.build(assembly, 0.9, contacts=contacts(assembly))
+    b_eq, _ = problem._right_hand_side(np.array([0.0, 0.0, -1.0]))
+    whole = _fixed_point(problem, b_eq)
+    frugal = cra_local.least_friction(problem, b_eq)
+    check = partial(problem.exact, b_eq)
+    stopped = cra_coulomb.coulomb_fixed_point(problem, b_eq, frugal[:, 0], check, iterations=5)
+    assert whole.found is not None and whole.rounds > 5 and stopped.found is None
+    assert len(stopped.history) == cra_coulomb.COULOMB_MEMORY + 1
+    continued = cra_coulomb.coulomb_fixed_point(problem, b_eq, None, check, history=stopped.history)
+    assert continued.found is not None and continued.rounds == whole.rounds - 5
+    assert np.allclose(continued.found[0], whole.found[0], atol=1e-9)
+
+
+def test_least_unbalanced_leaves_an_unsupported_block_unbalanced_and_its_dual_says_so():
+    # Four cubes, three free; the lower two settle by eps each, the top one moves with the second: its
+    # contact stays open, nothing carries its weight (a third of the load), and the dual prices exactly that
+    problem, b_eq = _problem(_stack((1.0,) * 4), 0.5, (0.0, 0.0, -1.0))
+    motion = np.zeros(18)
+    motion[2], motion[8], motion[14] = -1.0, -2.0, -2.0
+    least = cra_coulomb.least_unbalanced(problem, b_eq, motion, tolerance=1e-10)
+    assert least.residual == pytest.approx(1 / 3, abs=1e-8)
+    assert np.abs(least.slack[:12]).max() < 1e-8 and abs(least.slack[14]) == pytest.approx(1 / 3, abs=1e-8)
+    assert least.dual @ b_eq == pytest.approx(least.residual, abs=1e-8) and np.abs(least.dual).max() <= 1 + 1e-8
+    assert cra_coulomb.unbalanced(problem, b_eq, motion) == (pytest.approx(1.0 / 3, abs=1e-6), (3,))
+
+
+def test_shut_nearly_closed_adds_the_bounds_its_step_would_break(monkeypatch):
+    # Two twists, two vertices: vertex 0's normal row is 2 q_1 + q_2, 5e-6 eps from closed; vertex 1 slides by
+    # q_1, 1e-8 eps inside the bound eta / eps = 0.5.  The cheapest shut (q_1 alone) breaks that bound; with no
+    # row but the shut one to start from, the loop adds it and shuts through q_2, as the LP with every row does
+    from types import SimpleNamespace
+
+    import scipy.sparse as sp
+
+    kinematic = sp.csr_matrix(np.array([[2.0, 1.0], [0, 0], [0, 0], [0, 0], [1.0, 0], [0, 0]]))
+    problem = SimpleNamespace(kinematic=kinematic, ratio=0.5)
+    motion = np.array([-0.5 + 1e-8, 5e-6])
+    assert cra_coulomb.shut_nearly_closed(problem, motion) == pytest.approx([-0.5, 0.0], abs=1e-12)
+    monkeypatch.setattr(cra_coulomb, "SHUT_MARGIN", -1.0)
+    assert cra_coulomb.shut_nearly_closed(problem, motion) == pytest.approx([-0.5, 0.0], abs=1e-12)

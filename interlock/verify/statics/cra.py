@@ -228,8 +228,8 @@ def cra(assembly, mu: float, density: float = 1.0, gravity=(0.0, 0.0, -1.0), fra
         Seconds per MILP; a MILP that runs out of time gives "inconclusive".  On models past
         :data:`~interlock.verify.statics.cra_large.LARGE_VERTICES` contact vertices (no MILP), the
         seconds for each stage: the Coulomb fixed point starts no round that would, at the pace of
-        the one before, end later (the armadillo vault without block 238 needs about 50 s), and with
-        ``hold_out`` the rest's fixed point and the placements get as long again each.
+        the one before, end later (the armadillo vault needs about 20 s before it holds block 238 out),
+        and with ``hold_out`` the rest's fixed point and the placements get as long again each.
     backend : {"milp", "compas_cra"}
         "milp" decides as above.  "compas_cra" (the optional upstream package, for assemblies too
         large for the MILP) asks its local solver for a motion and verifies it with the exact LP:
@@ -242,7 +242,7 @@ def cra(assembly, mu: float, density: float = 1.0, gravity=(0.0, 0.0, -1.0), fra
         On large models, when the Coulomb fixed point cannot hold a few blocks (they slide to the bound
         ``eta`` round after round), prove the rest without them and place them
         (:mod:`~interlock.verify.statics.cra_split`; needs IPOPT, ``pip install "interlock[nlp]"``).
-        Each stage has ``time_limit``: the armadillo vault is proved stable this way in about two minutes
+        Each stage has ``time_limit``: the armadillo vault is proved stable this way in under a minute
         (docs/statics.md, "CRA at scale").  ``False`` stops at the fixed point and names those blocks.
 
     Returns

@@ -40,8 +40,8 @@ import scipy.sparse as sp
 from interlock.verify.statics import cra_coulomb, cra_ipopt, cra_local, cra_split
 from interlock.verify.statics.equilibrium import clarabel_lp
 
-__all__ = ["LARGE_VERTICES", "CHECK_RTOL", "CHECKED_TOLERANCE", "most_work", "exact", "interior_forces", "holds", "carries",
-           "decide_large"]
+__all__ = ["LARGE_VERTICES", "CHECK_RTOL", "CHECKED_TOLERANCE", "most_work", "exact", "interior_forces", "holds",
+           "carries", "decide_large"]
 
 #: Contact vertices above which :func:`~interlock.verify.statics.cra.cra` takes this route (the shelves of
 #: Fig. 7 and 12 have 60-90, the 36-voussoir arch 148, the armadillo vault 10,901).
