@@ -97,13 +97,18 @@ def coulomb_route(problem, b_eq, frugal, check, progress=None, **options):
     equilibrium ``frugal`` (:func:`least_friction`; ``None`` if there is none), each motion judged by ``check``,
     or ``(None, why not, fixed_point)`` naming what its closest motion leaves unbalanced (``fixed_point``: the
     :class:`~interlock.verify.statics.cra_coulomb.FixedPoint`, ``None`` if it did not start).  ``options``:
-    ``iterations``, ``time_limit`` of :func:`~interlock.verify.statics.cra_coulomb.coulomb_fixed_point`."""
-    if frugal is None:
+    ``iterations``, ``time_limit``, ``stuck`` and ``history`` of
+    :func:`~interlock.verify.statics.cra_coulomb.coulomb_fixed_point` (with a ``history``, it continues from
+    there and ``frugal`` may be ``None``)."""
+    continued = bool(options.get("history"))
+    if frugal is None and not continued:
         return None, "the Coulomb fixed point did not start (no least-friction equilibrium)", None
-    fixed_point = cra_coulomb.coulomb_fixed_point(problem, b_eq, frugal[:, 0], check, progress=progress, **options)
+    fixed_point = cra_coulomb.coulomb_fixed_point(problem, b_eq, None if frugal is None else frugal[:, 0], check,
+                                                  progress=progress, **options)
     if fixed_point.found is not None:
-        return (fixed_point.found, f"the Coulomb fixed point ({fixed_point.rounds} convex frictional-contact solves)",
-                fixed_point)
+        more = "more " if continued else ""
+        return (fixed_point.found, f"the Coulomb fixed point ({fixed_point.rounds} {more}convex frictional-contact "
+                                   f"solves)", fixed_point)
     return None, cra_coulomb.describe(fixed_point), fixed_point
 
 

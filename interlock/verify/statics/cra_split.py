@@ -130,19 +130,10 @@ def split_route(problem, b_eq, blocks, exact, time_limit: float = np.inf, progre
         progress(f"the rest, without {held}")
     rest, rows, vertices = without_blocks(problem, blocks)
     b_rest = b_eq[rows]
-    check = partial(exact, rest, b_rest)
-    if history:
-        fixed_point = cra_coulomb.coulomb_fixed_point(
-            rest, b_rest, None, check, progress=progress, time_limit=time_limit,
-            history=[(thresholds[vertices], step[vertices]) for thresholds, step in history])
-        proved = fixed_point.found
-        how = (cra_coulomb.describe(fixed_point) if proved is None else
-               f"the Coulomb fixed point continued without {'them' if len(blocks) > 1 else 'it'} "
-               f"({fixed_point.rounds} more convex frictional-contact solves)")
-    else:
-        frugal = cra_local.least_friction(rest, b_rest, interior=True)
-        proved, how, _ = cra_local.coulomb_route(rest, b_rest, frugal, check, progress=progress,
-                                                 time_limit=time_limit)
+    restricted = [(thresholds[vertices], step[vertices]) for thresholds, step in history]
+    frugal = None if restricted else cra_local.least_friction(rest, b_rest, interior=True)
+    proved, how, _ = cra_local.coulomb_route(rest, b_rest, frugal, partial(exact, rest, b_rest), progress=progress,
+                                             time_limit=time_limit, history=restricted)
     if proved is None:
         return None, f"holding out {held}: the rest is not proved either ({how})"
     motion = np.zeros(problem.kinematic.shape[1])
