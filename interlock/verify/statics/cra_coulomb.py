@@ -306,6 +306,20 @@ def bound_blocks(problem, motion) -> tuple:
     A block that (T) cannot hold slides until ``eta`` stops it, at each of its contacts; its neighbours have
     one such contact each.  On the armadillo the 8 components at the bound lie in contacts 228-238 and
     238-343, and the answer is ``(238,)``.
+
+    Examples
+    --------
+    Three cubes on a fixed one; the middle free cube slides by ``eta`` against both its neighbours.
+
+    >>> import numpy as np, trimesh
+    >>> from interlock.blocks import Assembly
+    >>> from interlock.verify.statics.cra import CRAProblem
+    >>> cubes = [trimesh.creation.box(bounds=[[0, 0, z], [1, 1, z + 1]]) for z in range(4)]
+    >>> problem = CRAProblem.build(Assembly.from_meshes(cubes, frame=[0]), 0.5)
+    >>> motion = np.zeros(18)
+    >>> motion[6:9] = [problem.ratio, 0.0, -1.0]
+    >>> bound_blocks(problem, motion)
+    (2,)
     """
     system = problem.system
     dd = (problem.kinematic @ motion).reshape(-1, 3)
