@@ -107,6 +107,14 @@ class MotionLP:
     sliding: np.ndarray
     slide: np.ndarray
 
+    def holds(self, x, b_eq) -> bool:
+        """Whether ``x >= 0`` solves this LP to :data:`~interlock.verify.statics.cra_large.CHECK_RTOL` times the
+        load: equilibrium (Eq. (7b)) and the friction pyramid (Eqs. (4)-(5)), residual by residual.  The exact
+        check every "stable" of the solver's routes passes, whichever solver found ``x``."""
+        scale = max(float(np.abs(b_eq).max()), 1e-300)
+        return bool(np.abs(self.a_eq @ x - b_eq).max() <= cra_large.CHECK_RTOL * scale
+                    and (self.a_ub @ x).max(initial=0.0) <= cra_large.CHECK_RTOL * scale)
+
     def forces(self, x) -> np.ndarray:
         """Per-vertex forces ``(f_n, f_u, f_v)`` from a solution ``x`` (clipped at 0: solvers return -1e-11)."""
         x = np.maximum(np.asarray(x, dtype=float), 0.0)
@@ -563,7 +571,7 @@ class CRAProblem:
 
     def exact(self, b_eq, motion):
         """Forces solving (11) for this motion (least ``sum f_n``), or ``None``: :meth:`motion_lp` by HiGHS,
-        its solution checked (:func:`~interlock.verify.statics.cra_large.holds`).  HiGHS meets its tolerance
+        its solution checked (:meth:`MotionLP.holds`).  HiGHS meets its tolerance
         in its own scaling, so a vertex slipping at the cone's limit can leave a row violated by 1e-5 of the
         load (shelf-stable); then Clarabel's interior solution, checked the same way, decides."""
         lp = self.motion_lp(motion)
@@ -574,7 +582,7 @@ class CRAProblem:
         if outcome.status != 0:
             return None
         x = np.maximum(outcome.x, 0.0)
-        return lp.forces(x) if cra_large.holds(lp, x, b_eq) else cra_large.interior_forces(lp, b_eq)
+        return lp.forces(x) if lp.holds(x, b_eq) else cra_large.interior_forces(lp, b_eq)
 
     # --- the result -------------------------------------------------------------------------------------------
 

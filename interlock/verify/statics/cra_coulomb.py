@@ -72,7 +72,8 @@ from scipy.optimize import Bounds, LinearConstraint, milp
 from interlock.verify.statics.equilibrium import clarabel_lp, clarabel_solve
 
 __all__ = ["COULOMB_ITERATIONS", "COULOMB_DAMPING", "COULOMB_MEMORY", "THRESHOLD_RTOL", "SHUT_TOL", "SHUT_RESIDUAL",
-           "SHUT_MARGIN", "STUCK_ROUNDS", "bound_blocks", "slack_lp", "LeastUnbalanced", "least_unbalanced",
+           "SHUT_MARGIN", "STUCK_ROUNDS", "CHECKED_TOLERANCE", "bound_blocks", "slack_lp", "LeastUnbalanced",
+           "least_unbalanced",
            "TrescaSolution", "FixedPoint", "tresca", "coulomb_fixed_point", "shut_nearly_closed", "unbalanced",
            "describe"]
 
@@ -101,6 +102,10 @@ STUCK_ROUNDS = 5
 #: contacts carry less than this share of the largest vertex force gets no friction in (T): the fixed point may
 #: then not settle it (the exact LP still judges every motion, so the answer is at worst "inconclusive").
 THRESHOLD_RTOL = 1e-6
+#: Clarabel's gap and feasibility tolerances for LPs whose solutions go to the exact check (``MotionLP.holds``): at
+#: its default, 1e-8, the slack LP's forces at the armadillo's certificate miss the equilibrium by 1.6 times
+#: ``CHECK_RTOL``; at 1e-10 they pass with 200 times to spare (0.6 s, two more iterations).
+CHECKED_TOLERANCE = 1e-10
 #: Unbalanced load per free block (in units of the free blocks' weight) below which a block counts as balanced.
 BALANCED_RTOL = 1e-7
 

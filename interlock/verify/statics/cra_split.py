@@ -26,8 +26,8 @@ few blocks ``H``, with the rest ``R`` held at a proved motion.
 3. **The whole, checked.**  At ``q = (q_R, q_H)`` the least ``|A_eq f - b|_1``
    over the forces (11) allows is found
    (:func:`~interlock.verify.statics.cra_coulomb.least_unbalanced`, Clarabel at
-   :data:`~interlock.verify.statics.cra_large.CHECKED_TOLERANCE`).  If its forces
-   pass the exact check of (11) (:func:`~interlock.verify.statics.cra_large.holds`:
+   :data:`~interlock.verify.statics.cra_coulomb.CHECKED_TOLERANCE`).  If its forces
+   pass the exact check of (11) (``MotionLP.holds``:
    equilibrium and pyramid to ``1e-7`` of the load): **stable**, whatever found
    them.  Otherwise the rest cannot
    carry what ``H`` puts on it, and the LP's dual ``y`` says so: for every force
@@ -52,7 +52,7 @@ from functools import partial
 import numpy as np
 from scipy.optimize import linprog
 
-from interlock.verify.statics import cra_coulomb, cra_ipopt, cra_large, cra_local
+from interlock.verify.statics import cra_coulomb, cra_ipopt, cra_local
 from interlock.verify.statics.equilibrium import friction_matrix
 
 __all__ = ["SPLIT_MOST_BLOCKS", "SPLIT_ROUNDS", "SPLIT_ATTEMPTS", "SCHOLTES", "PLACEMENT_ITERATIONS", "SHUT_TOLS",
@@ -150,7 +150,7 @@ def place_blocks(problem, b_eq, blocks, motion, time_limit: float = np.inf, prog
     of the rest (:func:`without_blocks`).  ``time_limit`` (seconds for the placements), ``progress`` and ``seed``
     as for :func:`split_route`.  The whole is judged by the forces of its slack LP, checked residual by residual
     (step 3): no least-``sum f_n`` LP after it.  At Clarabel's default tolerance (1e-8) those forces failed the
-    check at the armadillo's certificate; at :data:`~interlock.verify.statics.cra_large.CHECKED_TOLERANCE` they
+    check at the armadillo's certificate; at :data:`~interlock.verify.statics.cra_coulomb.CHECKED_TOLERANCE` they
     pass, in 0.6 s where HiGHS' simplex took 4-13 s for the slack LP and 12 s for the exact one.
     """
     rows, kept_contacts = _kept(problem, blocks)
@@ -171,11 +171,11 @@ def place_blocks(problem, b_eq, blocks, motion, time_limit: float = np.inf, prog
         checked += 1
         candidate = motion.copy()
         candidate[placement.dofs] = placed
-        least = cra_coulomb.least_unbalanced(problem, b_eq, candidate, tolerance=cra_large.CHECKED_TOLERANCE)
+        least = cra_coulomb.least_unbalanced(problem, b_eq, candidate, tolerance=cra_coulomb.CHECKED_TOLERANCE)
         if least is None:
             start = None
             continue
-        if cra_large.holds(least.lp, least.x, b_eq):
+        if least.lp.holds(least.x, b_eq):
             return ((candidate, least.lp.forces(least.x)),
                     f"placed by IPOPT: {attempt} solves, {checked} checked against the rest")
         cuts.append(placement.cut(least.dual[rows], b_rest))

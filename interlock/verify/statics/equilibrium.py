@@ -283,7 +283,7 @@ def clarabel_solve(quadratic, cost, constraints, right, cones, tolerance: float 
     may be ``None`` (an LP).  The one place the statics set Clarabel up (:func:`clarabel_lp`, and the cone
     program of :func:`~interlock.verify.statics.cra_coulomb.tresca`).  ``tolerance``, if given, replaces
     Clarabel's gap and feasibility tolerances (1e-8 by default; solutions that must pass an exact check use
-    :data:`~interlock.verify.statics.cra_large.CHECKED_TOLERANCE`)."""
+    :data:`~interlock.verify.statics.cra_coulomb.CHECKED_TOLERANCE`)."""
     import clarabel
 
     n = constraints.shape[1]
