@@ -397,7 +397,7 @@ def shut_nearly_closed(problem, motion, tolerance: float = SHUT_TOL):
     low, high = np.tile([-1.0, -ratio, -ratio], s) - dd, np.full(3 * s, ratio) - dd
     shut = 3 * np.flatnonzero(near)
     low[shut] = high[shut] = -1.0 - dd[shut]
-    rows = (np.minimum(-low, high) <= SHUT_MARGIN)
+    rows = np.minimum(-low, high) <= SHUT_MARGIN
     rows[shut] = True
     while True:
         taken = np.flatnonzero(rows)
@@ -412,7 +412,6 @@ def shut_nearly_closed(problem, motion, tolerance: float = SHUT_TOL):
         if not violated.any():
             return motion + step
         rows |= violated
-
 
 
 def unbalanced(problem, b_eq, motion):
