@@ -153,9 +153,9 @@ def decide_large(problem, b_eq, binaries: int, timings: dict, time_limit: float 
             else:
                 coulomb = f"{coulomb}; {split}"
         elif 0 < len(held) <= cra_split.SPLIT_MOST_BLOCKS:
-            coulomb = (f"{coulomb}; block{'s' if len(held) > 1 else ''} {', '.join(map(str, held))} slid to the "
-                       f"bound eta in its last round: cra(..., hold_out=True) proves the rest without "
-                       f"{'them' if len(held) > 1 else 'it'} and then places {'them' if len(held) > 1 else 'it'}")
+            them = "them" if len(held) > 1 else "it"
+            coulomb = (f"{coulomb}; {cra_split.named(held)} slid to the bound eta in its last round: "
+                       f"cra(..., hold_out=True) proves the rest without {them} and then places {them}")
     if found is not None:
         timings["lp"] = timings.get("lp", 0.0) + time.perf_counter() - started
         motion, forces, how = found

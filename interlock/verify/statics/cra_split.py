@@ -56,7 +56,7 @@ from interlock.verify.statics import cra_coulomb, cra_ipopt, cra_local
 from interlock.verify.statics.equilibrium import friction_matrix
 
 __all__ = ["SPLIT_MOST_BLOCKS", "SPLIT_ROUNDS", "SPLIT_ATTEMPTS", "SCHOLTES", "PLACEMENT_ITERATIONS", "SHUT_TOLS",
-           "without_blocks", "split_route", "place_blocks"]
+           "without_blocks", "split_route", "place_blocks", "named"]
 
 #: Most blocks held out: more would make step 2 a large nonconvex problem again.
 SPLIT_MOST_BLOCKS = 3
@@ -123,7 +123,7 @@ def split_route(problem, b_eq, blocks, exact, time_limit: float = np.inf, progre
     from the rest's least-friction equilibrium takes 14), else it starts afresh.
     """
     blocks = tuple(int(k) for k in blocks)
-    held = f"block{'s' if len(blocks) > 1 else ''} {', '.join(map(str, blocks))}"
+    held = named(blocks)
     if not cra_ipopt.available():
         return None, f"holding out {held} needs IPOPT ({cra_ipopt.MISSING_MESSAGE})"
     if progress is not None:
@@ -157,12 +157,11 @@ def place_blocks(problem, b_eq, blocks, motion, time_limit: float = np.inf, prog
     placement = _Placement.build(problem, b_eq, motion, rows, ~kept_contacts[problem.system.vertex_contact])
     b_rest = b_eq[rows]
     rng = np.random.default_rng(seed)
-    named = f"block{'s' if len(blocks) > 1 else ''} {', '.join(map(str, blocks))}"
     start, cuts, checked, attempt, began = None, [], 0, 0, time.perf_counter()
     while attempt < SPLIT_ATTEMPTS and checked < SPLIT_ROUNDS and time.perf_counter() - began <= time_limit:
         attempt += 1
         if progress is not None:
-            progress(f"placing {named}, attempt {attempt}")
+            progress(f"placing {named(blocks)}, attempt {attempt}")
         x, solved = placement.solve(placement.random_start(rng) if start is None else start, cuts)
         placed = placement.shut(x)  # IPOPT's "infeasible" point may still balance the held-out blocks
         start = x if solved and placed is not None else None  # on from here with one cut more, or a new start
@@ -181,6 +180,11 @@ def place_blocks(problem, b_eq, blocks, motion, time_limit: float = np.inf, prog
         cuts.append(placement.cut(least.dual[rows], b_rest))
     return None, (f"none of the {checked} placements checked against the rest ({attempt} IPOPT solves) was "
                   f"carried by it")
+
+
+def named(blocks) -> str:
+    """``blocks`` (assembly indices) in words: ``"block 238"``, ``"blocks 3, 7"``."""
+    return f"block{'s' if len(blocks) > 1 else ''} {', '.join(map(str, blocks))}"
 
 
 def _kept(problem, blocks):
