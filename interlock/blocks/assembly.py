@@ -340,6 +340,8 @@ class Assembly:
 
     def block_indices(self, values, what: str = "frame") -> tuple[int, ...]:
         """Sorted distinct block indices; a clear :class:`AssemblyError` for anything else."""
+        if values is not None and (isinstance(values, (str, bytes)) or not hasattr(values, "__iter__")):
+            raise AssemblyError(f"{what} must be a list of block indices (e.g. [0, 3]), got {values!r}")
         values = [] if values is None else list(values)
         out = []
         for v in values:

@@ -313,3 +313,66 @@ def test_a_block_grown_within_the_contact_tolerance_still_touches():
     middle = meshes[4].centroid.copy()
     meshes[4].apply_translation(-middle).apply_scale(1 + 2e-6).apply_translation(middle)
     assert check(Assembly.from_meshes(meshes, frame=list(assembly.frame))).interlocked is True
+
+
+# --- bounded time and checked arguments (every answer in bounded time) ------------------------------------
+
+
+@pytest.mark.parametrize("name, value", [("rank_rtol", float("nan")), ("lp_tol", -1.0), ("lp_tol", float("inf")),
+                                         ("rank_rtol", 0.0), ("lp_tol", True), ("tolerance", float("nan")),
+                                         ("tolerance", -1e-3), ("time_limit", float("nan")), ("time_limit", -1)])
+def test_numeric_arguments_out_of_range_are_refused_by_name(name, value):
+    with pytest.raises(InterlockError, match=name):
+        check(presets.cube_grid(), **{name: value})
+
+
+@pytest.mark.parametrize("frame, contacts, words", [(0, None, "frame"), (None, [1, 2, 3], "Contact")])
+def test_misused_frame_and_contacts_are_clear_errors(frame, contacts, words):
+    with pytest.raises(InterlockError, match=words):
+        check(presets.cube_grid(), frame=frame, contacts=contacts)
+
+
+def test_a_spent_time_limit_gives_inconclusive_naming_the_stage():
+    v = check(presets.interlocking_cubes(), time_limit=1e-9)  # spent before the first stage starts
+    assert v.interlocked is None
+    assert "time limit reached in validate" in str(v) and v.tolerances["stage"] == "validate"
+    assert check(presets.interlocking_cubes(), time_limit=3600).interlocked is True
+
+
+def _lift_along_a_wall():
+    """A cube on a fixed floor against a fixed wall: lifting it opens the floor and slides along the wall."""
+    boxes = [trimesh.creation.box(bounds=b) for b in ([[0, 0, -1], [2, 1, 0]], [[1, 0, 0], [2, 1, 1]],
+                                                     [[0, 0, 0], [1, 1, 1]])]
+    assembly = Assembly.from_meshes(boxes)
+    A = interlocking_matrix(assembly, frame=[0, 1])
+    lift = A.columns(np.array([[0, 0, 0, 0, 0, 1.0]]))
+    return A.matrix, lift
+
+
+def test_a_farkas_vector_with_interior_point_noise_is_cleaned_into_an_exact_motion():
+    from interlock.verify.check import opening_motion
+
+    A, lift = _lift_along_a_wall()
+    rng = np.random.default_rng(0)
+    noisy = lift + 1e-4 * rng.standard_normal(lift.shape)
+    y = A @ noisy
+    assert y.min() < -1e-5 * y.max()  # the rows along the wall come out negative, as an interior point leaves them
+    value, motion = opening_motion(A, noisy)
+    assert value is not None
+    y = A @ motion
+    assert y.min() >= -1e-7 * y.max() and y.max() == pytest.approx(1.0)
+    assert np.abs(y[y < 0.5]).max() <= 1e-12  # the wall's rows projected shut
+    np.testing.assert_allclose(motion / np.abs(motion).max(), lift / np.abs(lift).max(), atol=1e-3)
+
+
+def test_a_noisy_vector_that_is_not_a_motion_is_not_cleaned_into_one():
+    from interlock.verify.check import opening_motion
+
+    A, lift = _lift_along_a_wall()
+    assert opening_motion(A, -lift) == (None, None)  # pushes into the floor: no threshold makes it a motion
+
+
+def test_separate_blocks_need_no_dense_kernel():
+    cubes = [trimesh.creation.box(bounds=[[2 * x, 0, 0], [2 * x + 1, 1, 1]]) for x in range(300)]
+    v = check(Assembly.from_meshes(cubes), frame=[0], validate=False)
+    assert v.interlocked is False and v.shape == (0, 6 * 299) and "kernel dimension at least" in v.status
