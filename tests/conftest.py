@@ -3,8 +3,18 @@
 from pathlib import Path
 
 import pytest
+from hypothesis import settings
 
 from interlock import wallpaper
+
+#: Property tests draw the same examples on every run and machine (derandomised: each test's seed is fixed by
+#: its name), so CI cannot draw a case no earlier run saw; no deadline, since shared machines are noisy.
+settings.register_profile("interlock", derandomize=True, deadline=None, print_blob=True)
+settings.load_profile("interlock")
+
+
+def pytest_report_header(config):
+    return "hypothesis: profile 'interlock', derandomised (each test's seed fixed by its name), deadline none"
 
 ROOT = Path(__file__).resolve().parents[1]
 #: TopoLite and compas_cra files with their licences; ``tests/data/README.md`` gives provenance and verdicts.
