@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -12,7 +13,8 @@ from interlock.errors import AssemblyError, InterlockError
 
 __all__ = ["manifold_solid", "OverlapError", "Overlap", "pair_overlaps", "overlaps", "overlaps_without_contact",
            "refuse_overlaps_without_contact", "self_intersections", "validate", "OVERLAP_RTOL", "CROSSING_RTOL",
-           "SEPARATED_RTOL", "MAX_COORDINATE", "LEAF_TRIANGLES", "PAIR_CHUNK"]
+           "SEPARATED_RTOL", "MAX_COORDINATE", "LEAF_TRIANGLES", "PAIR_CHUNK", "penetration", "PENETRATION_SAMPLES",
+           "DEPTH_CHUNK"]
 
 #: Two blocks overlap when their common volume exceeds this fraction of the smaller one; it matches
 #: the contacts' angular tolerance (a face tilted by 1e-4 rad overlaps its neighbour in a wedge of ~1e-4 x volume).
@@ -44,13 +46,16 @@ class Overlap:
 
     ``thickness = 2 volume / area`` (``area``: the surface of the common solid) is its mean depth: ``d`` for
     a thin slab of depth ``d`` between parallel faces, about a third of the depth for a block's edge pressed
-    into a face.
+    into a face.  Both come from the boolean, which can be wrong on meshes whose edges are shared by more than
+    two triangles; ``depth``, when measured (:func:`validate` with ``depth``), is the robust
+    :func:`penetration` of the two blocks, and None otherwise.
     """
 
     i: int
     j: int
     volume: float
     thickness: float
+    depth: float | None = None
 
 
 def pair_overlaps(assembly: Assembly) -> list[Overlap]:
@@ -108,7 +113,7 @@ def overlaps_without_contact(found, contacts, distance: float) -> list[Overlap]:
     block, and a wrong "not interlocked" before this check).
     """
     touching = {(min(c.i, c.j), max(c.i, c.j)) for c in contacts}
-    return [o for o in found if o.thickness > distance and (min(o.i, o.j), max(o.i, o.j)) not in touching]
+    return [o for o in found if _deepness(o) > distance and (min(o.i, o.j), max(o.i, o.j)) not in touching]
 
 
 def self_intersections(mesh, rtol: float = CROSSING_RTOL) -> np.ndarray:
@@ -190,9 +195,57 @@ def self_intersections(mesh, rtol: float = CROSSING_RTOL) -> np.ndarray:
     return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))].astype(int)
 
 
-def validate(assembly: Assembly, rtol: float = OVERLAP_RTOL) -> list[Overlap]:
-    """Raise :class:`OverlapError` naming the block if a mesh crosses itself or two blocks overlap; return the
-    smaller overlaps that pass (for :func:`overlaps_without_contact` once the contacts are known)."""
+def validate(assembly: Assembly, rtol: float = OVERLAP_RTOL, depth=None) -> list[Overlap]:
+    """Refuse blocks that cross themselves or overlap; return the smaller overlaps that pass.
+
+    Parameters
+    ----------
+    assembly : Assembly
+    rtol : float
+        Two blocks overlap when the boolean finds a common volume above this
+        fraction of the smaller one (:data:`OVERLAP_RTOL`).
+    depth : float or sequence of float, optional
+        A length tolerance for overlaps: how deep two blocks may reach into
+        each other and still touch (the input's precision, a contact
+        tolerance).  One length for every pair, or one per block, and then a
+        pair may reach the sum of its two blocks' (each surface may lie its
+        own length from where it should).  Every pair whose common volume
+        exceeds ``rtol`` or whose mean depth (``Overlap.thickness``) exceeds
+        its length is then measured by :func:`penetration`, and refused when
+        that is deeper than its length, whatever the volume: a block
+        re-triangulated without moving its faces (where the boolean is wrong)
+        touches its neighbours; a block grown by 2e-4 into them overlaps.
+        None (the default): the volume alone decides.
+
+    Returns
+    -------
+    list of Overlap
+        Every pair with a common volume that passed (for
+        :func:`overlaps_without_contact` once the contacts are known); with
+        ``depth``, those whose boolean volume or thickness exceeds the
+        tolerance carry their measured ``depth``.
+
+    Raises
+    ------
+    OverlapError
+        Naming the block that crosses itself, or the two blocks that overlap;
+        also for a ``depth`` that is not a finite length >= 0 (or one per block).
+    AssemblyError
+        For coordinates beyond :data:`MAX_COORDINATE`.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> boxes = [trimesh.creation.box(bounds=[[x, 0, 0], [x + 1, 1, 1]]) for x in (0, 0.999)]
+    >>> try:
+    ...     validate(Assembly.from_meshes(boxes))
+    ... except OverlapError as error:
+    ...     print(str(error)[:56])
+    blocks 0 (0) and 1 (1) overlap in a volume of 0.001 (mor
+    >>> [round(o.depth, 6) for o in validate(Assembly.from_meshes(boxes), depth=0.002)]
+    [0.001]
+    """
+    allowed = _allowances(assembly, depth)
     reach = np.abs(assembly.bounds).max(axis=(1, 2)) if len(assembly) else np.zeros(0)
     if (reach > MAX_COORDINATE).any():
         k = int(np.argmax(reach))
@@ -206,6 +259,17 @@ def validate(assembly: Assembly, rtol: float = OVERLAP_RTOL) -> list[Overlap]:
             raise OverlapError(f"block {block} ({assembly.labels[block]}) intersects itself: {len(crossing)} pairs of "
                                f"its triangles cross (e.g. faces {crossing[0].tolist()}); blocks must be simple solids")
     every = pair_overlaps(assembly)
+    if allowed is not None:
+        every = _measured(assembly, every, rtol, allowed)
+        deep = [o for o in every if o.depth is not None and o.depth > allowed(o.i, o.j)]
+        if deep:
+            o = max(deep, key=lambda item: item.depth / allowed(item.i, item.j))
+            more = f" ({len(deep) - 1} more overlapping pairs)" if len(deep) > 1 else ""
+            raise OverlapError(
+                f"blocks {o.i} ({assembly.labels[o.i]}) and {o.j} ({assembly.labels[o.j]}) overlap: the surface of "
+                f"one reaches {o.depth:.3g} inside the other (a common volume of {o.volume:.3g}), deeper than the "
+                f"tolerance {allowed(o.i, o.j):.3g}{more}; blocks of an assembly may only touch")
+        return every
     found = overlaps(assembly, rtol, every)
     if found:
         i, j, volume = max(found, key=lambda item: item[2])
@@ -217,18 +281,167 @@ def validate(assembly: Assembly, rtol: float = OVERLAP_RTOL) -> list[Overlap]:
     return every
 
 
+def penetration(first, second) -> float:
+    """How deep the surface of either of two solids reaches inside the other (both in one frame).
+
+    The largest ``s1(p) + s2(p)`` over points ``p``, where ``s`` is the
+    signed distance to a solid's surface (positive inside): ``d`` for a block
+    moved ``d`` into its neighbour or a face pushed ``d`` in (between two
+    parallel faces the sum is the same everywhere), the length of a spike
+    stuck into the other block.  For solids whose interiors are disjoint the
+    sum is at most 0 at *every* point (the segment from a point inside one to
+    the nearest point of the other leaves the first on the way), so blocks
+    that only touch, however they are triangulated, measure 0.
+
+    Parameters
+    ----------
+    first, second : trimesh.Trimesh
+        Closed, consistently oriented meshes.
+
+    Returns
+    -------
+    float
+        The penetration, 0 when the solids are apart.
+
+    Notes
+    -----
+    The common solid (a manifold3d boolean) only says where to look: points
+    on each of its triangles (:data:`PENETRATION_SAMPLES`) are measured
+    against the two meshes themselves, inside or out by the winding number
+    and how far by the distance to the nearest triangle.  A boolean that is
+    wrong (as on meshes whose edges are shared by four triangles, where
+    manifold3d's volumes err by about 1 %) can only offer bad points, and no
+    point makes touching blocks overlap; a real overlap is measured as deep
+    as the deepest sampled point.  The cost is the number of sampled points times the
+    triangles of the two meshes, in bounded chunks.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> cube = trimesh.creation.box(bounds=[[0, 0, 0], [1, 1, 1]])
+    >>> pushed = trimesh.creation.box(bounds=[[0.999, 0.2, 0.2], [2, 0.8, 0.8]])
+    >>> round(penetration(cube, pushed), 9)
+    0.001
+    >>> penetration(cube, trimesh.creation.box(bounds=[[1, 0, 0], [2, 1, 1]])) < 1e-12  # touching
+    True
+    """
+    import manifold3d
+
+    common = manifold_solid(manifold3d, first, 0) ^ manifold_solid(manifold3d, second, 1)
+    return _penetration(first, second, common)
+
+
 def refuse_overlaps_without_contact(assembly: Assembly, found, contacts, distance: float) -> None:
     """Raise :class:`OverlapError` for the deepest of :func:`overlaps_without_contact`, if any."""
     loose = overlaps_without_contact(found, contacts, distance)
     if loose:
-        o = max(loose, key=lambda item: item.thickness)
+        o = max(loose, key=_deepness)
         more = f" ({len(loose) - 1} more such pairs)" if len(loose) > 1 else ""
         raise OverlapError(
-            f"blocks {o.i} ({assembly.labels[o.i]}) and {o.j} ({assembly.labels[o.j]}) overlap {o.thickness:.3g} deep "
+            f"blocks {o.i} ({assembly.labels[o.i]}) and {o.j} ({assembly.labels[o.j]}) overlap {_deepness(o):.3g} deep "
             f"(a volume of {o.volume:.3g}) without a face of one lying on a face of the other: deeper than the "
             f"contact tolerance {distance:.3g}, so they are neither apart nor touching{more}; move them apart or "
             "onto each other's faces"
         )
+
+
+def _deepness(overlap: Overlap) -> float:
+    """The depth of an overlap: measured (:func:`penetration`) when it was, else the boolean's mean depth."""
+    return overlap.thickness if overlap.depth is None else overlap.depth
+
+
+def _allowances(assembly: Assembly, depth):
+    """``depth`` checked, as a function of a pair ``(i, j)``: the depth it may reach (None for None)."""
+    if depth is None:
+        return None
+    values = np.asarray(depth, dtype=float) if not isinstance(depth, (str, bytes)) else np.array(np.nan)
+    if values.ndim > 1 or (values.ndim == 1 and len(values) != len(assembly)) or not np.isfinite(values).all() \
+            or (values < 0).any():
+        raise OverlapError(f"depth must be a finite length >= 0, or one per block ({len(assembly)} of them), "
+                           f"or None; got {depth!r}")
+    if values.ndim == 0:
+        return lambda i, j: float(values)
+    return lambda i, j: float(values[i] + values[j])
+
+
+def _measured(assembly: Assembly, found, rtol, allowed) -> list[Overlap]:
+    """``found`` with the :func:`penetration` of every pair whose boolean volume or thickness is too large."""
+    import manifold3d
+
+    doubtful = [k for k, o in enumerate(found) if o.thickness > allowed(o.i, o.j)
+                or o.volume > rtol * min(assembly.volumes[o.i], assembly.volumes[o.j])]
+    if not doubtful:
+        return list(found)
+    pairs = np.array([(found[k].i, found[k].j) for k in doubtful], dtype=int)
+    first, kind_of, relative = assembly.pair_kinds(pairs)
+    depths = []
+    for r in first:
+        i, j = pairs[r]
+        mine, other = assembly.meshes[assembly.types[i]], assembly.meshes[assembly.types[j]].copy()
+        other.apply_transform(relative[r])
+        if np.linalg.det(relative[r][:3, :3]) < 0:
+            other.invert()
+        common = manifold_solid(manifold3d, mine, i) ^ manifold_solid(manifold3d, other, j)
+        depths.append(_penetration(mine, other, common))
+    out = list(found)
+    for k, kind in zip(doubtful, kind_of):
+        out[k] = dataclasses.replace(found[k], depth=depths[kind])
+    return out
+
+
+#: Where :func:`penetration` looks on each triangle of the common solid (barycentric weights): the corners,
+#: the centre, and halfway from the centre to each corner.
+PENETRATION_SAMPLES = np.array([[1, 0, 0], [0, 1, 0], [0, 0, 1], [1 / 3, 1 / 3, 1 / 3],
+                                [2 / 3, 1 / 6, 1 / 6], [1 / 6, 2 / 3, 1 / 6], [1 / 6, 1 / 6, 2 / 3]])
+#: Points times triangles measured at once by :func:`penetration` (about 0.5 kB each: ~30 MB).
+DEPTH_CHUNK = 1 << 16
+
+
+def _penetration(first, second, common) -> float:
+    mesh = common.to_mesh()
+    vertices, faces = np.asarray(mesh.vert_properties, dtype=float)[:, :3], np.asarray(mesh.tri_verts, dtype=np.int64)
+    if not len(faces):
+        return 0.0
+    points = np.unique(np.einsum("sk,tkj->tsj", PENETRATION_SAMPLES, vertices[faces]).reshape(-1, 3), axis=0)
+    return float(max(0.0, (_signed_depths(first, points) + _signed_depths(second, points)).max()))
+
+
+def _signed_depths(mesh, points) -> np.ndarray:
+    """The distance from each point to the surface of the closed ``mesh``: positive inside, negative outside."""
+    triangles = np.asarray(mesh.triangles, dtype=float)
+    out = np.empty(len(points))
+    step = max(1, DEPTH_CHUNK // len(triangles))
+    for start in range(0, len(points), step):
+        p = points[start:start + step]
+        corners = triangles[None] - p[:, None, None]  # (points, triangles, 3 corners, 3)
+        a, b, c = corners[:, :, 0], corners[:, :, 1], corners[:, :, 2]
+        la, lb, lc = (np.linalg.norm(x, axis=2) for x in (a, b, c))
+        det = np.einsum("ptj,ptj->pt", a, np.cross(b, c))
+        below = la * lb * lc + np.einsum("ptj,ptj->pt", a, b) * lc + np.einsum("ptj,ptj->pt", b, c) * la \
+            + np.einsum("ptj,ptj->pt", c, a) * lb
+        winding = np.arctan2(det, below).sum(axis=1) / (2 * np.pi)  # the solid angles over 4 pi
+        out[start:start + step] = np.where(np.abs(winding) > 0.5, 1.0, -1.0) * _distances(p, triangles)
+    return out
+
+
+def _distances(points, triangles) -> np.ndarray:
+    """The distance from each point to the nearest of ``triangles``."""
+    a, b, c = triangles[:, 0], triangles[:, 1], triangles[:, 2]
+    normal = np.cross(b - a, c - a)
+    square = np.einsum("tj,tj->t", normal, normal)
+    d = points[:, None] - a[None]
+    over = np.einsum("ptj,tj->pt", d, normal)
+    within = square > 0
+    for u, v in ((a, b), (b, c), (c, a)):
+        within = within & (np.einsum("ptj,tj->pt", np.cross(v - u, points[:, None] - u[None]), normal) >= 0)
+    best = np.where(within, over**2 / np.where(square > 0, square, 1.0), np.inf)
+    for u, v in ((a, b), (b, c), (c, a)):
+        edge = v - u
+        along = np.clip(np.einsum("ptj,tj->pt", points[:, None] - u[None], edge)
+                        / np.maximum(np.einsum("tj,tj->t", edge, edge), 1e-300), 0.0, 1.0)
+        gap = points[:, None] - u[None] - along[..., None] * edge[None]
+        best = np.minimum(best, np.einsum("ptj,ptj->pt", gap, gap))
+    return np.sqrt(best.min(axis=1))
 
 
 def _unit_box(vertices) -> np.ndarray:

@@ -103,3 +103,104 @@ def test_huge_coordinates_are_refused_with_a_clear_error():
     broken.vertices[0] = np.inf
     with pytest.raises(OverlapError, match="non-finite"):
         self_intersections(broken)
+
+
+def _retriangulated(mesh, rng):
+    """The same solid on other triangles: points inside triangles, edges split, triangles cut in four (leaving
+    T-junctions for the reader to split), about one change for every two triangles."""
+    vertices, faces = [np.asarray(v, dtype=float) for v in mesh.vertices], [tuple(f) for f in mesh.faces]
+    for _ in range(max(1, len(faces) // 2)):
+        k = int(rng.integers(len(faces)))
+        a, b, c = faces[k]
+        kind = rng.integers(3)
+        if kind == 0:
+            w = rng.dirichlet([1, 1, 1])
+            vertices.append(w[0] * vertices[a] + w[1] * vertices[b] + w[2] * vertices[c])
+            m = len(vertices) - 1
+            faces[k] = (a, b, m)
+            faces += [(b, c, m), (c, a, m)]
+        elif kind == 1:
+            s = rng.uniform(0.2, 0.8)
+            vertices.append((1 - s) * vertices[a] + s * vertices[b])
+            m = len(vertices) - 1
+            for q, (x, y, z) in enumerate(list(faces)):
+                for p0, p1, p2 in ((x, y, z), (y, z, x), (z, x, y)):
+                    if {p0, p1} == {a, b}:
+                        faces[q] = (p0, m, p2)
+                        faces.append((m, p1, p2))
+                        break
+        else:
+            vertices += [(vertices[a] + vertices[b]) / 2, (vertices[b] + vertices[c]) / 2, (vertices[c] + vertices[a]) / 2]
+            ab, bc, ca = len(vertices) - 3, len(vertices) - 2, len(vertices) - 1
+            faces[k] = (a, ab, ca)
+            faces += [(ab, b, bc), (ca, bc, c), (ab, bc, ca)]
+    return np.array(vertices), np.array(faces)
+
+
+def _obj(path, pieces):
+    rows, base = [], 1
+    for k, (vertices, faces) in enumerate(pieces):
+        rows.append(f"o part_{k}")
+        rows += ["v %.17g %.17g %.17g" % tuple(v) for v in vertices]
+        rows += ["f %d %d %d" % tuple(f + base) for f in faces]
+        base += len(vertices)
+    path.write_text("\n".join(rows) + "\n")
+    return path
+
+
+@pytest.fixture(scope="module")
+def bunny(reference_data):
+    paths = sorted((reference_data / "topolite" / "bunny").glob("part_*.obj"), key=lambda p: int(p.stem[5:]))
+    return Assembly.load(paths)
+
+
+def test_a_retriangulated_bunny_touches_within_the_input_precision(bunny, tmp_path):
+    # issue 35: re-triangulating the bunny's parts (faces where they were) was refused as "overlap" in most copies:
+    # manifold3d's volumes err by ~1 % on blocks whose edges are shared by four triangles
+    meshes = [bunny.mesh(i) for i in range(len(bunny))]
+    for seed in range(4):
+        rng = np.random.default_rng(seed)
+        copy = Assembly.load(_obj(tmp_path / f"copy{seed}.obj", [_retriangulated(m, rng) for m in meshes]))
+        found = module.validate(copy, depth=1e-9 * copy.scale)
+        assert all(o.depth <= 1e-9 * copy.scale for o in found if o.depth is not None)
+
+
+@pytest.mark.parametrize("change", ["grown", "shifted"])
+def test_a_real_overlap_is_refused_within_the_input_precision(bunny, change):
+    meshes = [bunny.mesh(i) for i in range(len(bunny))]
+    block = meshes[10]
+    if change == "grown":  # 2e-4 of the part's size: a common volume far below the volume rule
+        centre = block.centroid.copy()
+        block.apply_translation(-centre).apply_scale(1.0002).apply_translation(centre)
+    else:  # 1e-3 into a neighbour
+        neighbour = min(bunny.neighbours[10])
+        towards = bunny.centroids[neighbour] - bunny.centroids[10]
+        block.apply_translation(1e-3 * towards / np.linalg.norm(towards))
+    moved = Assembly.from_meshes(meshes)
+    with pytest.raises(OverlapError, match=r"overlap: the surface of one reaches .* inside the other .* deeper than "
+                                           r"the tolerance"):
+        module.validate(moved, depth=1e-9 * moved.scale)
+    with pytest.raises(OverlapError, match=r"deeper than the tolerance"):  # one length per block
+        module.validate(moved, depth=np.full(len(moved), 1e-9 * moved.scale))
+
+
+@settings(max_examples=25)
+@given(st.floats(0.0, 0.1), st.integers(0, 2**32 - 1), st.floats(-3, 3))
+def test_penetration_of_a_box_moved_into_another_is_the_move(offset, seed, exponent):
+    # between parallel faces the signed depths add up to the move, at any placement and scale (where the move is
+    # thinner than the boxes' other sides, so the two moved faces are the nearest ones)
+    size = 10.0**exponent
+    motion = trimesh.transformations.random_rotation_matrix(np.random.default_rng(seed).random(3))
+    motion[:3, 3] = np.random.default_rng(seed).uniform(-5, 5, 3) * size
+    first = trimesh.creation.box(bounds=np.array([[0, 0, 0], [1, 1, 1]]) * size).apply_transform(motion)
+    second = trimesh.creation.box(bounds=np.array([[1 - offset, 0.2, 0.1], [2, 0.9, 0.7]]) * size)
+    second.apply_transform(motion)
+    assert module.penetration(first, second) == pytest.approx(offset * size, abs=1e-9 * size)
+
+
+def test_depth_must_be_a_length_or_one_per_block():
+    boxes = Assembly.from_meshes([trimesh.creation.box(bounds=[[x, 0, 0], [x + 1, 1, 1]]) for x in (0, 1)])
+    for bad in (float("nan"), -1.0, float("inf"), [0.1], [0.1, 0.1, 0.1], "1e-6"):
+        with pytest.raises(OverlapError, match=r"depth must be a finite length >= 0, or one per block \(2 of them\)"):
+            module.validate(boxes, depth=bad)
+    assert module.validate(boxes, depth=[0.0, 1e-9]) == []
