@@ -8,7 +8,9 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
+import time
 import warnings
 
 import interlock
@@ -104,6 +106,9 @@ def _parser() -> argparse.ArgumentParser:
     verify.add_argument("--frames", metavar="FOLDER",
                         help="with --order 2: write a finite motion shown into FOLDER, frame by frame "
                              "(STL, and PNG with the plot extra)")
+    verify.add_argument("--time-limit", type=float, default=None, metavar="SECONDS",
+                        help="seconds for the whole command (reading the files included); past it the answer is "
+                             "'inconclusive: time limit reached in <stage>' (default: no limit)")
     verify.add_argument("--json", action="store_true", help="print JSON instead of text")
     verify.set_defaults(run=_run_verify)
 
@@ -160,13 +165,13 @@ def _parser() -> argparse.ArgumentParser:
                            help="paper: the circumscribed octagon; inner: an inscribed one (conservative)")
     stability.add_argument("--tilt-axis", metavar="AXIS", help="also find the critical tilt about x, y, xy30 or X,Y,Z")
     stability.add_argument("--time-limit", type=float, default=None, metavar="SECONDS",
-                           help="cra: seconds per MILP before local solvers get the last word and an undecided "
-                                "answer is 'inconclusive'; on large models (no MILP), seconds for the whole "
-                                "answer (default 60)")
+                           help="seconds for the whole command (reading the files, rbe or cra, the tilt scan); past "
+                                "it the answer is 'inconclusive: time limit reached in <stage>' (default: no limit; "
+                                "the route cra takes never depends on the clock)")
     stability.add_argument("--no-hold-out", dest="hold_out", action="store_false",
                            help="cra on large models: stop at the Coulomb fixed point and name the blocks that "
                                 "slide to the bound eta, instead of proving the rest without them and then "
-                                "placing them (the default; needs interlock[nlp], each stage gets --time-limit)")
+                                "placing them (the default; needs interlock[nlp])")
     stability.add_argument("--contacts", default="interfaces", choices=("interfaces", "exact"),
                            help="interfaces: faces that meet across small gaps and tilts, relative to each block "
                                 "pair's thickness (default); exact: faces that touch")
@@ -303,7 +308,19 @@ def _run_groups(args) -> int:
     return 0
 
 
+def _time_limit(seconds, started: float) -> float | None:
+    """What is left of ``--time-limit`` (``seconds``) after what the command has spent since ``started`` (imports,
+    reading the files), at least a millisecond; ``None`` without a limit.  A bad value is refused."""
+    if seconds is None:
+        return None
+    if not seconds > 0 or math.isnan(seconds):
+        raise InterlockError(f"--time-limit must be a number of seconds > 0, got {seconds:g}")
+    return max(seconds - (time.perf_counter() - started), 1e-3)
+
+
 def _run_verify(args) -> int:
+    started = time.perf_counter()
+    _time_limit(args.time_limit, started)
     from interlock.verify import check
 
     from tqdm import tqdm
@@ -318,8 +335,9 @@ def _run_verify(args) -> int:
             bar.set_description(f"verify: {stage}")
             bar.update(1)
 
+        limit = {} if args.time_limit is None else {"time_limit": _time_limit(args.time_limit, started)}
         verdict = check(assembly, translational=args.translational, certify=args.certify, progress=announce,
-                        order=args.order)
+                        order=args.order, **limit)
     frames = []
     if args.frames and verdict.finite_motion is not None and verdict.finite_motion.shown:
         import importlib.util
@@ -403,10 +421,12 @@ def _run_periodic(args) -> int:
 
 
 def _run_stability(args) -> int:
+    started = time.perf_counter()
+    _time_limit(args.time_limit, started)
     from tqdm import tqdm
 
-    from interlock.verify import critical_tilt, rbe
-    from interlock.verify.statics import cra
+    from interlock.verify import rbe
+    from interlock.verify.statics import cra, tilt_scan
 
     paths = args.paths[0] if len(args.paths) == 1 else args.paths
     assembly = _load(paths, args.fixed)
@@ -414,13 +434,9 @@ def _run_stability(args) -> int:
         stored = "no supports are marked in the file" if args.fixed is None else "--fixed names none"
         raise InterlockError(f"the assembly has no supports ({stored}): give the fixed blocks with --fixed, "
                              "e.g. --fixed 0,1; without supports nothing can carry the weight")
-    if args.time_limit is not None and args.method != "cra":
-        raise InterlockError("--time-limit applies to --method cra only (rbe is one LP)")
     if not args.hold_out and args.method != "cra":
         raise InterlockError("--no-hold-out applies to --method cra only")
-    cra_options = {} if args.time_limit is None else {"time_limit": args.time_limit}
-    if not args.hold_out:
-        cra_options["hold_out"] = False
+    cra_options = {} if args.hold_out else {"hold_out": False}
     found = args.contacts
     if args.interfaces is not None:
         from interlock.verify.statics import compas_interfaces
@@ -436,31 +452,38 @@ def _run_stability(args) -> int:
                 bar.update(1)
 
             result = cra(assembly, args.mu, density=args.density, cone=args.cone, contacts=found,
-                         progress=stage, **cra_options)
+                         progress=stage, time_limit=_time_limit(args.time_limit, started), **cra_options)
     else:
-        result = rbe(assembly, args.mu, density=args.density, cone=args.cone, contacts=found)
+        result = rbe(assembly, args.mu, density=args.density, cone=args.cone, contacts=found,
+                     time_limit=_time_limit(args.time_limit, started))
     tilt = None
     if args.tilt_axis is not None:
         axis = (args.tilt_axis if args.tilt_axis in ("x", "y", "xy30")
                 else _numbers(args.tilt_axis, float, "--tilt-axis"))
         with tqdm(desc=f"tilt about {args.tilt_axis}", unit="angle", disable=None) as bar:
             def advance(angle, stable):
-                bar.set_postfix_str(f"{angle:.2f} deg {'stable' if stable else 'not stable'}")
+                words = {True: "stable", False: "not stable"}.get(stable, "undecided")
+                bar.set_postfix_str(f"{angle:.2f} deg {words}")
                 bar.update(1)
 
-            tilt = critical_tilt(assembly, axis, args.mu, method=args.method, density=args.density, cone=args.cone,
-                                 cra_options=cra_options or None, progress=advance, contacts=found)
+            tilt = tilt_scan(assembly, axis, args.mu, method=args.method, density=args.density, cone=args.cone,
+                             cra_options=cra_options or None, progress=advance, contacts=found,
+                             time_limit=_time_limit(args.time_limit, started))
     if args.json:
-        print(json.dumps({**result.to_dict(), "critical_tilt_degrees": tilt}, indent=2))
+        print(json.dumps({**result.to_dict(), "critical_tilt_degrees": None if tilt is None else tilt.angle,
+                          **({} if tilt is None else {"critical_tilt": tilt.to_dict()})}, indent=2))
         return 0
     print(result)
     if "friction utilisation" in str(result):
         print("  (friction utilisation: the largest |friction| / (mu x normal force) at one contact vertex of the "
               "forces found, against the round cone; not a safety factor, and above 1 on the polygonal cone's "
               "corners; see docs/statics.md)")
-    if tilt is not None:
-        angle = "stable up to 180 degrees" if tilt >= 180 else f"{tilt:.1f} degrees"
+    if tilt is not None and tilt.status == "decided":
+        angle = "stable up to 180 degrees" if tilt.angle >= 180 else f"{tilt.angle:.1f} degrees"
         print(f"critical tilt about {args.tilt_axis}: {angle}")
+    elif tilt is not None:
+        print(f"critical tilt about {args.tilt_axis}: inconclusive, stable up to {tilt.stable_below:.1f} degrees, "
+              f"undecided at {tilt.angle:.2f} degrees ({tilt.undecided[-1][1]})")
     return 0
 
 

@@ -21,9 +21,11 @@ from interlock.verify.statics.equilibrium import (CONES, DEFAULT_EPS, DEFAULT_ET
 from interlock.verify.statics.interfaces import (DEFAULT_AREA_THICKNESS, DEFAULT_GAP_THICKNESS, Interfaces,
                                                  compas_interfaces, thickness)
 from interlock.verify.statics.rbe import rbe
-from interlock.verify.statics.tilt import DEFAULT_TILT_STEP, DEFAULT_TILT_TOL, TILT_AXES, critical_tilt, tilted_gravity
+from interlock.verify.statics.tilt import (DEFAULT_TILT_STEP, DEFAULT_TILT_TOL, TILT_AXES, TiltScan, critical_tilt,
+                                          tilt_scan, tilted_gravity)
 
-__all__ = ["rbe", "StabilityResult", "StabilityError", "cra", "CRAResult", "critical_tilt", "tilted_gravity",
+__all__ = ["rbe", "StabilityResult", "StabilityError", "cra", "CRAResult", "critical_tilt", "tilt_scan", "TiltScan",
+           "tilted_gravity",
            "TILT_AXES", "CONES", "DEFAULT_SIDES", "DEFAULT_TILT_STEP", "DEFAULT_TILT_TOL", "DEFAULT_EPS", "DEFAULT_ETA",
            "DEFAULT_SECTORS", "DEFAULT_FORCE_BOUND", "DEFAULT_MIN_SLIDE", "REFINED_SECTORS", "FRICTION_RTOL",
            "Interfaces", "compas_interfaces", "thickness", "DEFAULT_GAP_THICKNESS", "DEFAULT_AREA_THICKNESS"]

@@ -44,7 +44,7 @@ decided globally:
    active set and the friction directions and an LP looks for a motion that
    realises them exactly, and SLSQP solves (11) locally from the MILP's point; then the
    sectors are refined (``4 -> 8 -> 16``).
-   If none of this gives a solution, or HiGHS does not decide within ``time_limit``, local solvers
+   If none of this gives a solution, or HiGHS does not decide within ``milp_nodes`` nodes, local solvers
    have the last word (above :data:`LOCAL_FIRST_BINARIES` binaries they go before the MILP): IPOPT
    on the whole of (11), as in the paper, if CasADi is installed (:mod:`interlock.verify.statics.cra_ipopt`),
    then SLSQP from where the assembly settles (the motion closing the most vertices that, keeping
@@ -58,22 +58,23 @@ Only the ratio ``eta / eps`` matters (the constraints are homogeneous in
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
-from functools import cache, cached_property
+from dataclasses import dataclass, field, replace
+from functools import cache
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.optimize import linprog
 
 from interlock.verify.statics import cra_large, cra_local, cra_milp
 from interlock.verify.statics.cra_compas import upstream_solution
 from interlock.verify.statics.cra_local import ACTIVE_TOL, SLIDE_TOL
 from interlock.verify.statics.cra_milp import BOUND_MARGIN
-from interlock.verify.statics.equilibrium import (DEFAULT_EPS, DEFAULT_ETA, DEFAULT_SIDES, EquilibriumSystem,
-                                                  StabilityError, contact_words, gravity_vector, json_float, positive)
+from interlock.verify.statics.equilibrium import (DEFAULT_EPS, DEFAULT_ETA, DEFAULT_SIDES, Budget, EquilibriumSystem,
+                                                  StabilityError, TimeLimitReached, contact_words, gravity_vector,
+                                                  highs_lp, json_float, positive)
 
 __all__ = ["CRAResult", "CRAProblem", "MotionLP", "cra", "decider", "DEFAULT_EPS", "DEFAULT_ETA", "DEFAULT_SECTORS",
-           "DEFAULT_FORCE_BOUND", "DEFAULT_MIN_SLIDE", "REFINED_SECTORS", "SLIDE_TOL"]
+           "DEFAULT_FORCE_BOUND", "DEFAULT_MIN_SLIDE", "REFINED_SECTORS", "SLIDE_TOL", "DEFAULT_TIME_LIMIT",
+           "MILP_NODES"]
 
 #: Angular sectors of the contact plane in the first MILP, and the refinements tried when its motion
 #: cannot be made exact.
@@ -83,8 +84,16 @@ REFINED_SECTORS = (8, 16)
 DEFAULT_FORCE_BOUND = 1e3
 #: Smallest virtual slide (along the sector bisector) of a vertex carrying friction, as a fraction of ``eps``.
 DEFAULT_MIN_SLIDE = 1e-3
-#: Seconds HiGHS may spend on one MILP before the answer is "inconclusive".
-DEFAULT_TIME_LIMIT = 60.0
+#: Seconds for the whole call: none by default.  The route CRA takes is chosen by iteration and size limits
+#: (:data:`MILP_NODES`, the fixed point's rounds, IPOPT's and SLSQP's iterations), never by the clock, so a verdict
+#: does not depend on the machine's speed; a time limit only turns it into "inconclusive: time limit reached in
+#: <stage>".
+DEFAULT_TIME_LIMIT = None
+#: Branch-and-bound nodes HiGHS may explore in one MILP (``node_limit``) before the MILP counts as undecided and
+#: the local solvers take over.  The MILPs that decide in the tests need at most a few hundred (model H and the
+#: wedges of Table 2: 1-40); the 8-voussoir arch tilted by 4 degrees, which 60 s did not decide, explores
+#: thousands.
+MILP_NODES = 2000
 #: Above this many binaries (vertices times ``1 + sectors``) the local solvers run before the MILP, which
 #: rarely decides so large a model in time (the shelves of Fig. 7 and 12: 300-460; the wedges: 40-80).
 LOCAL_FIRST_BINARIES = 200
@@ -199,8 +208,8 @@ class CRAResult:
 def cra(assembly, mu: float, density: float = 1.0, gravity=(0.0, 0.0, -1.0), frame=None, cone: str = "paper",
         sides: int = DEFAULT_SIDES, eps: float = DEFAULT_EPS, eta: float = DEFAULT_ETA,
         sectors: int = DEFAULT_SECTORS, force_bound: float = DEFAULT_FORCE_BOUND,
-        min_slide: float = DEFAULT_MIN_SLIDE, time_limit: float = DEFAULT_TIME_LIMIT, contacts=None,
-        backend: str = "milp", progress=None, hold_out: bool = True) -> CRAResult:
+        min_slide: float = DEFAULT_MIN_SLIDE, time_limit=DEFAULT_TIME_LIMIT, contacts=None,
+        backend: str = "milp", progress=None, hold_out: bool = True, milp_nodes: int = MILP_NODES) -> CRAResult:
     """Coupled rigid-block analysis: is there an equilibrium that a virtual motion realises? (CRA paper, (11)).
 
     Forces ``f`` at the contact vertices and a virtual motion ``dq`` of the
@@ -232,12 +241,12 @@ def cra(assembly, mu: float, density: float = 1.0, gravity=(0.0, 0.0, -1.0), fra
         motion, which (11) implies), so with the default the bound rarely matters.
     min_slide : float
         Smallest slide of a friction-carrying vertex, as a fraction of ``eps``.
-    time_limit : float
-        Seconds per MILP; a MILP that runs out of time gives "inconclusive".  On models past
-        :data:`~interlock.verify.statics.cra_large.LARGE_VERTICES` contact vertices (no MILP), the
-        seconds for each stage: the Coulomb fixed point starts no round that would, at the pace of
-        the one before, end later (the armadillo vault needs about 20 s before it holds block 238 out),
-        and with ``hold_out`` the rest's fixed point and the placements get as long again each.
+    time_limit : float, optional
+        Seconds for the whole call, every stage included (contacts, RBE, the MILPs and their bounds, the
+        Coulomb fixed point, IPOPT, SLSQP, the placements): IPOPT gets the time left as ``max_wall_time``,
+        HiGHS and Clarabel as ``time_limit``, and loops check it between steps.  When it runs out the answer
+        is "inconclusive: time limit reached in <stage>" (a little past the limit: a solver stops at its next
+        check).  Default: no limit.  The clock never chooses the route (:data:`DEFAULT_TIME_LIMIT`).
     backend : {"milp", "compas_cra"}
         "milp" decides as above.  "compas_cra" (the optional upstream package, for assemblies too
         large for the MILP) asks its local solver for a motion and verifies it with the exact LP:
@@ -250,8 +259,11 @@ def cra(assembly, mu: float, density: float = 1.0, gravity=(0.0, 0.0, -1.0), fra
         On large models, when the Coulomb fixed point cannot hold a few blocks (they slide to the bound
         ``eta`` round after round), prove the rest without them and place them
         (:mod:`~interlock.verify.statics.cra_split`; needs IPOPT, ``pip install "interlock[nlp]"``).
-        Each stage has ``time_limit``: the armadillo vault is proved stable this way in under a minute
-        (docs/statics.md, "CRA at scale").  ``False`` stops at the fixed point and names those blocks.
+        Each stage is bounded by its rounds and attempts: the armadillo vault is proved stable this way in
+        about a minute (docs/statics.md, "CRA at scale").  ``False`` stops at the fixed point and names those blocks.
+    milp_nodes : int
+        Branch-and-bound nodes per MILP (:data:`MILP_NODES`); a MILP that explores them undecided hands over to
+        the local solvers.  A deterministic limit: the same model takes the same route on any machine.
 
     Returns
     -------
@@ -261,7 +273,9 @@ def cra(assembly, mu: float, density: float = 1.0, gravity=(0.0, 0.0, -1.0), fra
     ------
     StabilityError
         Bad parameters (as for ``rbe``, and ``eps``, ``eta``, ``sectors``, ``force_bound``,
-        ``min_slide``, ``time_limit``).
+        ``min_slide``, ``milp_nodes``).
+    InterlockError
+        ``time_limit`` not a number of seconds > 0.
 
     Examples
     --------
@@ -277,38 +291,55 @@ def cra(assembly, mu: float, density: float = 1.0, gravity=(0.0, 0.0, -1.0), fra
     >>> rbe(h, mu=0.84).stable, cra(h, mu=0.84).status
     (True, 'unstable')
     """
-    problem = CRAProblem.build(assembly, mu, density, frame, cone, sides, eps, eta, force_bound, min_slide, contacts)
-    gravity, sectors, time_limit = gravity_vector(gravity), _sector_count(sectors), positive("time_limit", time_limit)
+    budget = Budget.start(time_limit)
+    gravity, sectors = gravity_vector(gravity), _sector_count(sectors)
+    if backend not in ("milp", "compas_cra"):
+        raise StabilityError(f"backend must be 'milp' or 'compas_cra', got {backend!r}")
+    problem = CRAProblem.build(assembly, mu, density, frame, cone, sides, eps, eta, force_bound, min_slide, contacts,
+                               milp_nodes)
     if backend == "compas_cra":
         return problem.check_upstream(assembly, gravity)
-    if backend != "milp":
-        raise StabilityError(f"backend must be 'milp' or 'compas_cra', got {backend!r}")
-    return problem.solve(gravity, sectors, time_limit, progress=progress, hold_out=hold_out)
+    return problem.solve(gravity, sectors, budget, progress=progress, hold_out=hold_out)
 
 
-def decider(assembly, mu: float, sectors: int = DEFAULT_SECTORS, time_limit: float = DEFAULT_TIME_LIMIT,
-            **options):
-    """``gravity -> True | False | None``: :func:`cra`'s verdict under many loads, with contacts and matrices
-    built once (for :func:`~interlock.verify.statics.critical_tilt`); ``options`` as for :func:`cra`.
+def decider(assembly, mu: float, sectors: int = DEFAULT_SECTORS, time_limit=DEFAULT_TIME_LIMIT, **options):
+    """``(gravity, budget=None) -> CRAResult``: :func:`cra` under many loads, with contacts and matrices built
+    once (for :func:`~interlock.verify.statics.tilt_scan`); ``options`` as for :func:`cra`.  ``time_limit``:
+    seconds for each load; ``budget``, if given, bounds the call as well (the scan's).
 
     The motions of earlier stable loads are tried first (a tilt scan moves the load a little at a time).
     """
+    Budget.start(time_limit)  # checked here, started per load
     problem = CRAProblem.build(assembly, mu, **options)
-    sectors, time_limit = _sector_count(sectors), positive("time_limit", time_limit)
+    sectors = _sector_count(sectors)
     known: list[np.ndarray] = []
 
-    def stable(gravity) -> bool | None:
-        result = problem.solve(gravity_vector(gravity), sectors, time_limit, known)
+    def solve(gravity, budget: Budget | None = None) -> CRAResult:
+        own = Budget.start(time_limit)
+        if budget is not None and budget.started + budget.limit < own.started + own.limit:
+            own = budget
+        result = problem.solve(gravity_vector(gravity), sectors, own, known)
         if result.stable:
             known.insert(0, problem.internal_motion(result.motion))
             del known[WARM_STARTS:]
-        return result.stable
+        return result
 
-    return stable
+    return solve
+
+
+def json_limit(budget: Budget) -> float | None:
+    """The budget's limit in seconds for a result's ``parameters`` (``None``: no limit)."""
+    return None if budget.limit == float("inf") else budget.limit
 
 
 def _silent(stage: str) -> None:
     """The default ``progress``: says nothing."""
+
+
+def _node_count(nodes) -> int:
+    if isinstance(nodes, bool) or not isinstance(nodes, (int, np.integer)) or nodes < 1:
+        raise StabilityError(f"milp_nodes must be an integer >= 1, got {nodes!r}")
+    return int(nodes)
 
 
 def _sector_count(sectors) -> int:
@@ -327,10 +358,14 @@ class CRAProblem:
     force_bound: float
     min_slide: float
     parameters: dict
+    milp_nodes: int = MILP_NODES
+    budget: Budget = field(default_factory=Budget)  # of the call being solved (:meth:`within`)
+    memo: dict = field(default_factory=dict, repr=False)  # per-problem results shared by every call: reach, cuts
 
     @classmethod
     def build(cls, assembly, mu, density=1.0, frame=None, cone="paper", sides=DEFAULT_SIDES, eps=DEFAULT_EPS,
-              eta=DEFAULT_ETA, force_bound=DEFAULT_FORCE_BOUND, min_slide=DEFAULT_MIN_SLIDE, contacts=None):
+              eta=DEFAULT_ETA, force_bound=DEFAULT_FORCE_BOUND, min_slide=DEFAULT_MIN_SLIDE, contacts=None,
+              milp_nodes=MILP_NODES):
         system = EquilibriumSystem.build(assembly, mu, density, frame, cone, sides, contacts)
         eps, eta = positive("eps", eps), positive("eta", eta)
         if not eps < eta:
@@ -340,27 +375,46 @@ class CRAProblem:
             raise StabilityError(f"min_slide must be below eta / eps = {eta / eps:.3g}, got {min_slide}")
         parameters = {**system.parameters, "eps": eps, "eta": eta, "eps_absolute": eps * assembly.scale,
                       "eta_absolute": eta * assembly.scale, "force_bound": force_bound, "min_slide": min_slide,
-                      "length": assembly.scale}
-        return cls(system, system.a_eq.T.tocsr(), eta / eps, force_bound, min_slide, parameters)
+                      "length": assembly.scale, "milp_nodes": _node_count(milp_nodes)}
+        return cls(system, system.a_eq.T.tocsr(), eta / eps, force_bound, min_slide, parameters, int(milp_nodes))
+
+    def within(self, budget: Budget | None) -> CRAProblem:
+        """This problem, its solvers bounded by ``budget`` (the matrices and :attr:`memo` shared)."""
+        return replace(self, budget=budget or Budget())
 
     # --- the whole decision -----------------------------------------------------------------------------------
 
-    def solve(self, gravity: np.ndarray, sectors: int, time_limit: float, known=(), progress=None,
+    def solve(self, gravity: np.ndarray, sectors: int, budget: Budget | None = None, known=(), progress=None,
               hold_out: bool = False) -> CRAResult:
-        progress = progress or _silent
+        """:func:`cra` for this gravity within ``budget``: when it runs out, "inconclusive: time limit reached in
+        <stage>"."""
+        problem = self.within(budget)
         timings = {**self.system.timings, "milp": 0.0, "lp": 0.0}
+        try:
+            problem.budget.check("the contacts")
+            return problem._solve(gravity, sectors, known, progress or _silent, hold_out, timings)
+        except TimeLimitReached as out:
+            parameters = {**self.parameters, "sectors": [], "gravity": gravity.tolist(),
+                          "time_limit": json_limit(problem.budget)}
+            return self._result("inconclusive", str(out), None, None, parameters, timings)
+
+    def _solve(self, gravity, sectors, known, progress, hold_out, timings) -> CRAResult:
         b_eq, total = self._right_hand_side(gravity)
         tried, message, status = [], "", "inconclusive"
         started = time.perf_counter()
         progress("RBE")
-        rbe_forces, status_rbe, _, _ = self.system.solve_lp(gravity, least_force=True)
+        rbe_forces, status_rbe, rbe_message, _ = self.system.solve_lp(gravity, least_force=True, budget=self.budget)
+        if status_rbe not in (0, 2):  # no solver decided RBE: nothing is known
+            timings["lp"] += time.perf_counter() - started
+            parameters = {**self.parameters, "sectors": tried, "gravity": gravity.tolist()}
+            return self._result("inconclusive", f"RBE was not decided ({rbe_message}), so CRA cannot be either",
+                                None, None, parameters, timings)
         if status_rbe == 0 and rbe_forces is None:  # nothing to carry (no free block touches anything)
             rbe_forces = np.zeros(0)
         if status_rbe == 0 and len(self.system.points) > cra_large.LARGE_VERTICES and not known:
             timings["lp"] += time.perf_counter() - started
             status, forces, motion, message = cra_large.decide_large(
-                self, b_eq, len(self.system.points) * (1 + sectors), timings,
-                time_limit - (time.perf_counter() - started), progress, hold_out)
+                self, b_eq, len(self.system.points) * (1 + sectors), timings, progress, hold_out)
             parameters = {**self.parameters, "sectors": tried, "gravity": gravity.tolist(), "route": "large"}
             return self._result(status, message, None if forces is None else forces * total, motion, parameters,
                                 timings)
@@ -391,9 +445,10 @@ class CRAProblem:
             tried.append(count)
             progress(f"MILP with {count} sectors")
             started = time.perf_counter()
-            outcome = cra_milp.relaxation(self, b_eq, force_bounds, count, time_limit)
+            outcome = cra_milp.relaxation(self, b_eq, force_bounds, count, self.milp_nodes, work=work)
             if outcome is None:  # an infeasibility claim is checked on a looser formulation (floating point)
-                outcome = cra_milp.relaxation(self, b_eq, force_bounds, count, time_limit, tightened=False)
+                outcome = cra_milp.relaxation(self, b_eq, force_bounds, count, self.milp_nodes, tightened=False,
+                                              work=work)
             timings["milp"] += time.perf_counter() - started
             if outcome is None:
                 status, message = "unstable", (f"no motion realises an equilibrium (MILP with {count} sectors "
@@ -504,23 +559,30 @@ class CRAProblem:
 
     # --- motions and the MILP's bounds -------------------------------------------------------------------------
 
-    @cached_property
+    @property
     def allowed_motions(self) -> tuple[sp.csr_matrix, np.ndarray]:
         """``(A, b)`` with ``A q <= b`` exactly when ``dd_n >= -eps`` and ``|dd| <= eta`` (eps = 1)."""
-        d = self.kinematic
-        s = d.shape[0] // 3
-        return (sp.vstack([d, -d], format="csr"),
+        if "allowed_motions" not in self.memo:
+            d = self.kinematic
+            s = d.shape[0] // 3
+            self.memo["allowed_motions"] = (
+                sp.vstack([d, -d], format="csr"),
                 np.concatenate([np.full(3 * s, self.ratio), np.tile([1.0, self.ratio, self.ratio], s)]))
+        return self.memo["allowed_motions"]
 
-    @cached_property
+    @property
     def reach(self) -> np.ndarray:
         """:func:`~interlock.verify.statics.cra_milp.vertex_reach`, once per problem (a tilt scan solves many loads)."""
-        return cra_milp.vertex_reach(self)
+        if "reach" not in self.memo:
+            self.memo["reach"] = cra_milp.vertex_reach(self)
+        return self.memo["reach"]
 
-    @cached_property
+    @property
     def face_cuts(self) -> np.ndarray:
         """:func:`~interlock.verify.statics.cra_milp.face_cuts`, once per problem."""
-        return cra_milp.face_cuts(self)
+        if "face_cuts" not in self.memo:
+            self.memo["face_cuts"] = cra_milp.face_cuts(self)
+        return self.memo["face_cuts"]
 
     def _most_work(self, b_eq):
         """``(bound, motion)``: the most work ``-b.q`` the load can do on an allowed motion (``dd_n >= -eps``,
@@ -532,7 +594,7 @@ class CRAProblem:
         into its seat closes every contact), which :meth:`_quick` tries.
         """
         a_ub, b_ub = self.allowed_motions
-        outcome = linprog(b_eq, A_ub=a_ub, b_ub=b_ub, bounds=(None, None), method="highs")
+        outcome = highs_lp(b_eq, self.budget, "the motion of most work", A_ub=a_ub, b_ub=b_ub, bounds=(None, None))
         if outcome.status != 0:
             return np.inf, None
         return -outcome.fun * (1 + BOUND_MARGIN) + BOUND_MARGIN, outcome.x
@@ -554,7 +616,7 @@ class CRAProblem:
                          - (system.a_eq[:, 2::3] @ sp.diags(slide[:, 1])))[:, sliding]
         a_eq = sp.hstack([normal_columns, slide_columns], format="csr")
         # per sliding vertex and cone row k: -m f_n + alpha (-(cos a_k) dd_u - (sin a_k) dd_v) <= 0
-        cone_rows = system.cone_rows
+        cone_rows = system.cone_rows / max(1.0, -float(system.cone_rows[0, 0]))  # rows within range for large mu
         sides = len(cone_rows)
         n_closed, n_sliding = int(closed.sum()), int(sliding.sum())
         which = np.flatnonzero(sliding)
@@ -577,12 +639,12 @@ class CRAProblem:
         lp = self.motion_lp(motion)
         if lp is None:
             return None
-        outcome = linprog(lp.cost, A_ub=lp.a_ub, b_ub=np.zeros(lp.a_ub.shape[0]),
-                          A_eq=lp.a_eq, b_eq=b_eq, bounds=(0, None), method="highs")
+        outcome = highs_lp(lp.cost, self.budget, "the exact LP", A_ub=lp.a_ub, b_ub=np.zeros(lp.a_ub.shape[0]),
+                           A_eq=lp.a_eq, b_eq=b_eq, bounds=(0, None))
         if outcome.status != 0:
             return None
         x = np.maximum(outcome.x, 0.0)
-        return lp.forces(x) if lp.holds(x, b_eq) else cra_large.interior_forces(lp, b_eq)
+        return lp.forces(x) if lp.holds(x, b_eq) else cra_large.interior_forces(lp, b_eq, self.budget)
 
     # --- the result -------------------------------------------------------------------------------------------
 

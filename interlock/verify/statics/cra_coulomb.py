@@ -62,14 +62,13 @@ out): see docs/statics.md, "CRA at scale".
 
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
 from scipy.optimize import Bounds, LinearConstraint, milp
 
-from interlock.verify.statics.equilibrium import clarabel_lp, clarabel_solve
+from interlock.verify.statics.equilibrium import TimeLimitReached, clarabel_lp, clarabel_solve
 
 __all__ = ["COULOMB_ITERATIONS", "COULOMB_DAMPING", "COULOMB_MEMORY", "THRESHOLD_RTOL", "SHUT_TOL", "SHUT_RESIDUAL",
            "SHUT_MARGIN", "STUCK_ROUNDS", "CHECKED_TOLERANCE", "bound_blocks", "slack_lp", "LeastUnbalanced",
@@ -215,7 +214,8 @@ def tresca(problem, b_eq, thresholds, stiffness: float) -> TrescaSolution | None
                               format="csc")
     cost = np.concatenate([b_eq, np.zeros(2 * r), thresholds[rubbing]])
     solution = clarabel_solve(quadratic, cost, constraints, right,
-                              [clarabel.NonnegativeConeT(7 * s)] + [clarabel.SecondOrderConeT(3)] * r)
+                              [clarabel.NonnegativeConeT(7 * s)] + [clarabel.SecondOrderConeT(3)] * r,
+                              budget=problem.budget, stage="the Coulomb fixed point")
     status = str(solution.status)
     if status not in ("Solved", "AlmostSolved"):
         return None
@@ -229,8 +229,8 @@ def tresca(problem, b_eq, thresholds, stiffness: float) -> TrescaSolution | None
 
 
 def coulomb_fixed_point(problem, b_eq, normal_forces, check, iterations: int = COULOMB_ITERATIONS,
-                        damping: float = COULOMB_DAMPING, memory: int = COULOMB_MEMORY, time_limit: float = np.inf,
-                        progress=None, stuck: int | None = None, history=()):
+                        damping: float = COULOMB_DAMPING, memory: int = COULOMB_MEMORY, progress=None,
+                        stuck: int | None = None, history=()):
     """Iterate (T) towards Coulomb's law (module docstring) and return a :class:`FixedPoint`.
 
     Parameters
@@ -245,10 +245,9 @@ def coulomb_fixed_point(problem, b_eq, normal_forces, check, iterations: int = C
         ``check(motion)`` -> forces solving (11) exactly at ``motion``, or ``None`` (the exact LP).
     iterations, damping, memory : int, float, int
         Most rounds, the weight of the new thresholds, and the rounds Anderson acceleration remembers
-        (:data:`COULOMB_ITERATIONS`, :data:`COULOMB_DAMPING`, :data:`COULOMB_MEMORY`).
-    time_limit : float
-        Seconds within which the rounds end: a round starts only if, at the pace of the one before, it ends
-        in time.
+        (:data:`COULOMB_ITERATIONS`, :data:`COULOMB_DAMPING`, :data:`COULOMB_MEMORY`).  The rounds are counted,
+        not timed, so the iteration ends the same way on every machine; ``problem.budget`` is checked before
+        each round (:class:`~interlock.verify.budget.TimeLimitReached`).
     progress : callable, optional
         Called with ``"Coulomb fixed point, round k"`` as each round starts.
     stuck : int, optional
@@ -266,15 +265,14 @@ def coulomb_fixed_point(problem, b_eq, normal_forces, check, iterations: int = C
     The stiffness is ``|b|_1 / s``: a vertex carrying an average share of the load
     slides by about ``eps`` before it slips.
     """
-    started = time.perf_counter()
     radius = -float(problem.system.cone_rows[:, 0].max())  # the round cone inside the pyramid
     history = list(history)  # (thresholds, step) of the last rounds
     s = len(history[-1][0]) if history else len(normal_forces)
     stiffness = float(np.abs(b_eq).sum()) / max(s, 1)
     thresholds = _floored(_anderson(history, damping) if history else radius * np.maximum(normal_forces, 0.0))
-    closest, best, blocks, rounds, pace, at_bound, repeats = None, None, (), 0, 0.0, (), 0
-    while rounds < iterations and time.perf_counter() - started + pace < time_limit:
-        begun = time.perf_counter()
+    closest, best, blocks, rounds, at_bound, repeats = None, None, (), 0, (), 0
+    while rounds < iterations:
+        problem.budget.check(f"the Coulomb fixed point, round {rounds + 1}")
         rounds += 1
         if progress is not None:
             progress(f"Coulomb fixed point, round {rounds}")
@@ -299,7 +297,6 @@ def coulomb_fixed_point(problem, b_eq, normal_forces, check, iterations: int = C
         if stuck is not None and at_bound and repeats >= stuck:
             break
         thresholds = _floored(_anderson(history, damping))
-        pace = time.perf_counter() - begun
     return FixedPoint(None, rounds, closest, best, blocks, at_bound, tuple(history))
 
 
@@ -401,9 +398,15 @@ def shut_nearly_closed(problem, motion, tolerance: float = SHUT_TOL):
     rows[shut] = True
     while True:
         taken = np.flatnonzero(rows)
+        limit = problem.budget.solver_limit()
+        if limit is not None:
+            problem.budget.check("shutting nearly closed vertices")
         outcome = milp(np.ones(2 * n_q), bounds=Bounds(0.0, np.inf),  # no integer variables: HiGHS' LP
                        constraints=LinearConstraint(sp.hstack([d[taken], -d[taken]], format="csr"), low[taken],
-                                                    high[taken]))
+                                                    high[taken]),
+                       options={} if limit is None else {"time_limit": limit})
+        if outcome.status == 1 and "time limit" in str(outcome.message).lower():
+            raise TimeLimitReached("shutting nearly closed vertices")
         if outcome.status != 0:
             return None
         step = outcome.x[:n_q] - outcome.x[n_q:]
@@ -481,7 +484,7 @@ def least_unbalanced(problem, b_eq, motion, tolerance: float | None = None) -> L
     inequalities = sp.vstack([inequalities, -sp.eye(n + 2 * m)])
     solution = clarabel_lp(cost, sp.vstack([equalities, inequalities], format="csc"),
                            np.concatenate([b_eq, np.zeros(inequalities.shape[0])]), equalities=m,
-                           tolerance=tolerance)
+                           tolerance=tolerance, budget=problem.budget, stage="the exact LP with slack")
     if str(solution.status) not in ("Solved", "AlmostSolved"):
         return None
     solved = np.asarray(solution.x)

@@ -26,7 +26,10 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-__all__ = ["MISSING_MESSAGE", "IPOPT_ITERATIONS", "available", "local_solutions"]
+from interlock.verify.budget import TimeLimitReached
+
+__all__ = ["MISSING_MESSAGE", "IPOPT_ITERATIONS", "available", "local_solutions", "deadline_options",
+           "timed_out"]
 
 MISSING_MESSAGE = 'IPOPT is not installed: pip install "interlock[nlp]" (CasADi, whose wheels carry IPOPT)'
 #: Most IPOPT iterations per start (shelf-stable takes 400-700; an iteration on the 36-voussoir arch 14 ms).
@@ -44,7 +47,7 @@ def available() -> bool:
     return bool(casadi.has_nlpsol("ipopt"))
 
 
-def local_solutions(a_eq, a_ub, b_eq, ratio: float, starts, iterations: int = IPOPT_ITERATIONS):
+def local_solutions(a_eq, a_ub, b_eq, ratio: float, starts, iterations: int = IPOPT_ITERATIONS, budget=None):
     """Yield ``(motion, forces, status)`` of IPOPT on problem (11) from each start ``(motion, forces)``.
 
     Parameters
@@ -60,7 +63,10 @@ def local_solutions(a_eq, a_ub, b_eq, ratio: float, starts, iterations: int = IP
     starts : iterable of (ndarray or None, ndarray or None)
         Starting motions ``(6 f,)`` and forces ``(s, 3)``; ``None`` starts from zero.
     iterations : int
-        Most IPOPT iterations per start.
+        Most IPOPT iterations per start (the limit that makes the route the same on every machine).
+    budget : Budget, optional
+        The call's time budget: each start gets the time left as IPOPT's ``max_wall_time``, and running out
+        raises :class:`~interlock.verify.budget.TimeLimitReached` ("IPOPT on (11)").
 
     Yields
     ------
@@ -96,16 +102,71 @@ def local_solutions(a_eq, a_ub, b_eq, ratio: float, starts, iterations: int = IP
     upper = np.concatenate([b_eq, np.zeros(n_ub + s), np.zeros(2 * s), np.full(3 * s, ratio)])
     variables = casadi.vertcat(q, f, alpha)
     low = np.concatenate([np.full(n_q, -np.inf), np.tile([0.0, -np.inf, -np.inf], s), np.zeros(s)])
+    stage = "IPOPT on (11)"
+    options, clock = deadline_options(budget, stage, variables.numel(), constraints.numel())
     solver = casadi.nlpsol("cra", "ipopt", {"x": variables, "f": casadi.sumsqr(normal) + casadi.sumsqr(alpha),
                                             "g": constraints},
                            {"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes",
-                            "ipopt.max_iter": int(iterations), "ipopt.tol": IPOPT_TOLERANCE})
+                            "ipopt.max_iter": int(iterations), "ipopt.tol": IPOPT_TOLERANCE, **options})
     for motion, forces in starts:
+        if budget is not None:
+            budget.check(stage)
         x0 = np.concatenate([np.zeros(n_q) if motion is None else motion,
                              np.zeros(3 * s) if forces is None else np.ravel(forces), np.zeros(s)])
         solution = solver(x0=x0, lbx=low, ubx=np.inf, lbg=lower, ubg=upper)
+        status = str(solver.stats()["return_status"])
+        if timed_out(status, budget):
+            raise TimeLimitReached(stage)
         x = np.asarray(solution["x"]).ravel()
-        yield x[:n_q], x[n_q:n_q + 3 * s].reshape(-1, 3), str(solver.stats()["return_status"])
+        yield x[:n_q], x[n_q:n_q + 3 * s].reshape(-1, 3), status
+    del clock
+
+
+def deadline_options(budget, stage: str, variables: int, constraints: int, parameters: int = 0):
+    """``(options, callback)``: CasADi options that stop IPOPT once ``budget`` has no time left (an iteration
+    callback asking the budget after every iteration: IPOPT's own ``max_wall_time`` would count from each
+    solve and miss the second or more that CasADi spends setting the solver up), and the callback, to keep
+    alive as long as the solver.  ``({}, None)`` without a limit; :class:`~interlock.verify.budget.TimeLimitReached`
+    naming ``stage`` if no time is left already.  ``variables``, ``constraints``, ``parameters``: the NLP's sizes."""
+    if budget is None or budget.solver_limit() is None:
+        return {}, None
+    budget.check(stage)
+    import casadi
+
+    class Deadline(casadi.Callback):
+        def __init__(self):
+            casadi.Callback.__init__(self)
+            self.construct("deadline", {})
+
+        def get_n_in(self):
+            return casadi.nlpsol_n_out()
+
+        def get_n_out(self):
+            return 1
+
+        def get_name_in(self, i):
+            return casadi.nlpsol_out(i)
+
+        def get_name_out(self, i):
+            return "ret"
+
+        def get_sparsity_in(self, i):
+            size = {"f": 1, "x": variables, "lam_x": variables, "g": constraints, "lam_g": constraints,
+                    "p": parameters, "lam_p": parameters}[casadi.nlpsol_out(i)]
+            return casadi.Sparsity.dense(size, 1) if size else casadi.Sparsity(0, 0)
+
+        def eval(self, arg):
+            return [1 if budget.remaining() <= 0 else 0]
+
+    clock = Deadline()
+    return {"iteration_callback": clock, "iteration_callback_ignore_errors": False}, clock
+
+
+def timed_out(status: str, budget=None) -> bool:
+    """Whether IPOPT stopped for the time: its own time limits, or the deadline callback
+    (:func:`deadline_options`; "User_Requested_Stop") with ``budget`` spent."""
+    return ("Time" in status and "Exceeded" in status) or (
+        status == "User_Requested_Stop" and budget is not None and budget.remaining() <= 0)
 
 
 def _times(matrix, vector):

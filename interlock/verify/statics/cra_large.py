@@ -60,7 +60,7 @@ def most_work(problem, b_eq):
     vertex component (an equilibrium: ``A_eq forces = b``), or ``(None, None)``.
     """
     a_ub, b_ub = problem.allowed_motions
-    solved = _clarabel(b_eq, a_ub, b_ub)
+    solved = _clarabel(b_eq, a_ub, b_ub, budget=problem.budget, stage="the motion of most work")
     if solved is None:
         return None, None
     q, z = solved
@@ -73,16 +73,16 @@ def exact(problem, b_eq, motion):
     """Forces solving (11) exactly at ``motion`` (least ``sum f_n``), or ``None``: the LP of
     ``CRAProblem.motion_lp`` solved by Clarabel, then every residual checked (:data:`CHECK_RTOL`)."""
     lp = problem.motion_lp(motion)
-    return None if lp is None else interior_forces(lp, b_eq)
+    return None if lp is None else interior_forces(lp, b_eq, problem.budget)
 
 
-def interior_forces(lp, b_eq):
+def interior_forces(lp, b_eq, budget=None):
     """Forces of the LP of (11) at a motion (``lp``: a ``MotionLP``) by Clarabel, if they pass ``lp.holds``;
-    else ``None``."""
+    else ``None``.  ``budget``: the call's time budget."""
     n = len(lp.cost)
     constraints = sp.vstack([lp.a_eq, lp.a_ub, -sp.eye(n)], format="csc")
     right = np.concatenate([b_eq, np.zeros(lp.a_ub.shape[0] + n)])
-    solved = _clarabel(lp.cost, constraints, right, equalities=lp.a_eq.shape[0])
+    solved = _clarabel(lp.cost, constraints, right, equalities=lp.a_eq.shape[0], budget=budget, stage="the exact LP")
     if solved is None:
         return None
     x = np.maximum(solved[0], 0.0)
@@ -103,17 +103,17 @@ def carries(problem, b_eq, closed: np.ndarray) -> bool | None:
     normal = sp.csr_matrix((-np.ones(m), (np.arange(m), 3 * np.arange(m))), shape=(m, 3 * m))
     constraints = sp.vstack([system.a_eq[:, columns], a_ub, normal], format="csc")
     right = np.concatenate([b_eq, np.zeros(constraints.shape[0] - len(b_eq))])
-    status = str(clarabel_lp(np.tile([1.0, 0.0, 0.0], m), constraints, right, equalities=len(b_eq)).status)
+    status = str(clarabel_lp(np.tile([1.0, 0.0, 0.0], m), constraints, right, equalities=len(b_eq),
+                             budget=problem.budget, stage="why the motion of most work fails").status)
     return True if status == "Solved" else False if status == "PrimalInfeasible" else None
 
 
-def decide_large(problem, b_eq, binaries: int, timings: dict, time_limit: float = np.inf, progress=None,
-                 hold_out: bool = False):
+def decide_large(problem, b_eq, binaries: int, timings: dict, progress=None, hold_out: bool = False):
     """``(status, forces, motion, message)`` for a large model (see the module docstring); forces in units of
     the free blocks' weight, the motion in units of ``eps``.  ``binaries``: the MILP's size, for the message;
-    ``time_limit``: seconds from the call within which the Coulomb fixed point's rounds end (and then each stage
-    of holding blocks out); ``progress(words)``, if given, is told as each stage starts; ``hold_out``: hold out
-    the blocks the fixed point cannot hold (:mod:`~interlock.verify.statics.cra_split`), else name them."""
+    ``progress(words)``, if given, is told as each stage starts; ``hold_out``: hold out the blocks the fixed
+    point cannot hold (:mod:`~interlock.verify.statics.cra_split`), else name them.  Every stage is bounded by
+    its rounds or attempts (the same route on every machine) and by ``problem.budget``."""
     started = time.perf_counter()
     if progress is not None:
         progress("the motion of most work")
@@ -140,14 +140,13 @@ def decide_large(problem, b_eq, binaries: int, timings: dict, time_limit: float 
         frugal = cra_local.least_friction(problem, b_eq, interior=True)
         result, coulomb, fixed_point = cra_local.coulomb_route(
             problem, b_eq, frugal, lambda m: exact(problem, b_eq, m), progress,
-            time_limit=time_limit - (time.perf_counter() - started),
             stuck=cra_coulomb.STUCK_ROUNDS if hold_out and cra_ipopt.available() else None)
         held = () if fixed_point is None else fixed_point.at_bound
         if result is not None:
             found = (*result, coulomb)
         elif hold_out and 0 < len(held) <= cra_split.SPLIT_MOST_BLOCKS:
-            result, split = cra_split.split_route(problem, b_eq, held, exact, time_limit=time_limit,
-                                                  progress=progress, history=fixed_point.history)
+            result, split = cra_split.split_route(problem, b_eq, held, exact, progress=progress,
+                                                  history=fixed_point.history)
             if result is not None:
                 found = (*result, split)
             else:
@@ -178,10 +177,10 @@ def decide_large(problem, b_eq, binaries: int, timings: dict, time_limit: float 
             f"cra(..., backend='compas_cra') checks its motion exactly) was not tried")
 
 
-def _clarabel(cost, constraints, right, equalities: int = 0):
+def _clarabel(cost, constraints, right, equalities: int = 0, budget=None, stage: str = "an LP"):
     """``(x, z)`` (primal, dual) of :func:`~interlock.verify.statics.equilibrium.clarabel_lp` when Clarabel
     solves it, else ``None``."""
-    solution = clarabel_lp(cost, constraints, right, equalities)
+    solution = clarabel_lp(cost, constraints, right, equalities, budget=budget, stage=stage)
     if str(solution.status) != "Solved":
         return None
     return np.asarray(solution.x), np.asarray(solution.z)

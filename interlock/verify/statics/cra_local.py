@@ -25,10 +25,10 @@ import time
 import numpy as np
 import scipy.sparse as sp
 from scipy.linalg import null_space
-from scipy.optimize import linprog, minimize
+from scipy.optimize import minimize
 
 from interlock.verify.statics import cra_coulomb, cra_ipopt
-from interlock.verify.statics.equilibrium import clarabel_lp
+from interlock.verify.statics.equilibrium import clarabel_lp, highs_lp
 
 __all__ = ["least_friction", "realise", "realise_least_friction", "settled_motion", "snap", "polish",
            "verify_local", "last_resort", "coulomb_route"]
@@ -74,7 +74,7 @@ def last_resort(problem, b_eq, rbe_forces, most_work, timings, progress=None, fr
         started = time.perf_counter()
         try:
             for motion, forces, status in cra_ipopt.local_solutions(problem.system.a_eq, problem.system.a_ub, b_eq,
-                                                                    problem.ratio, starts):
+                                                                    problem.ratio, starts, budget=problem.budget):
                 statuses.append(status)
                 found = verify_local(problem, b_eq, motion, forces)
                 if found is not None:
@@ -97,7 +97,7 @@ def coulomb_route(problem, b_eq, frugal, check, progress=None, **options):
     equilibrium ``frugal`` (:func:`least_friction`; ``None`` if there is none), each motion judged by ``check``,
     or ``(None, why not, fixed_point)`` naming what its closest motion leaves unbalanced (``fixed_point``: the
     :class:`~interlock.verify.statics.cra_coulomb.FixedPoint`, ``None`` if it did not start).  ``options``:
-    ``iterations``, ``time_limit``, ``stuck`` and ``history`` of
+    ``iterations``, ``stuck`` and ``history`` of
     :func:`~interlock.verify.statics.cra_coulomb.coulomb_fixed_point` (with a ``history``, it continues from
     there and ``frugal`` may be ``None``)."""
     continued = bool(options.get("history"))
@@ -167,11 +167,12 @@ def least_friction(problem, b_eq, interior: bool = False):
     if interior:
         normal = sp.csr_matrix((-np.ones(s), (np.arange(s), 3 * np.arange(s))), shape=(s, 5 * s))
         solution = clarabel_lp(cost, sp.vstack([a_eq, a_ub, normal], format="csc"),
-                               np.concatenate([b_eq, np.zeros(a_ub.shape[0] + s)]), equalities=len(b_eq))
+                               np.concatenate([b_eq, np.zeros(a_ub.shape[0] + s)]), equalities=len(b_eq),
+                               budget=problem.budget, stage="the least-friction equilibrium")
         return np.asarray(solution.x)[:3 * s].reshape(-1, 3) if str(solution.status) == "Solved" else None
     bounds = np.vstack([system.bounds, np.tile([0.0, np.inf], (2 * s, 1))])
-    outcome = linprog(cost, A_ub=a_ub, b_ub=np.zeros(a_ub.shape[0]), A_eq=a_eq, b_eq=b_eq, bounds=bounds,
-                      method="highs")
+    outcome = highs_lp(cost, problem.budget, "the least-friction equilibrium", A_ub=a_ub, b_ub=np.zeros(a_ub.shape[0]),
+                       A_eq=a_eq, b_eq=b_eq, bounds=bounds)
     return outcome.x[:3 * s].reshape(-1, 3) if outcome.status == 0 else None
 
 
@@ -208,8 +209,8 @@ def realise(problem, forces):
     b_ub = np.concatenate([np.tile([1.0, problem.ratio, problem.ratio], s), np.full(3 * s, problem.ratio)])
     low_beta = problem.min_slide / friction[which]
     bounds = [(None, None)] * n_q + [(lb, None) for lb in low_beta]
-    outcome = linprog(np.zeros(n_q + n_b), A_ub=a_ub, b_ub=b_ub, A_eq=sp.vstack(blocks_eq, format="csr"),
-                      b_eq=np.concatenate(b_eq), bounds=bounds, method="highs")
+    outcome = highs_lp(np.zeros(n_q + n_b), problem.budget, "a motion realising forces", A_ub=a_ub, b_ub=b_ub,
+                       A_eq=sp.vstack(blocks_eq, format="csr"), b_eq=np.concatenate(b_eq), bounds=bounds)
     return outcome.x[:n_q] if outcome.status == 0 else None
 
 
@@ -219,13 +220,13 @@ def settled_motion(problem, b_eq):
     when the MILP does not decide).  ``None`` if an LP fails."""
     a_ub, b_ub = problem.allowed_motions
     d_n = problem.kinematic[0::3]
-    closing = linprog(np.asarray(d_n.sum(axis=0)).ravel(), A_ub=a_ub, b_ub=b_ub, bounds=(None, None),
-                      method="highs")
+    closing = highs_lp(np.asarray(d_n.sum(axis=0)).ravel(), problem.budget, "where the assembly settles",
+                       A_ub=a_ub, b_ub=b_ub, bounds=(None, None))
     if closing.status != 0:
         return None
     closed = d_n @ closing.x + 1.0 <= ACTIVE_TOL
-    working = linprog(b_eq, A_ub=a_ub, b_ub=b_ub, A_eq=d_n[closed], b_eq=np.full(int(closed.sum()), -1.0),
-                      bounds=(None, None), method="highs")
+    working = highs_lp(b_eq, problem.budget, "where the assembly settles", A_ub=a_ub, b_ub=b_ub, A_eq=d_n[closed],
+                       b_eq=np.full(int(closed.sum()), -1.0), bounds=(None, None))
     return working.x if working.status == 0 else None
 
 
@@ -236,7 +237,9 @@ def polish(problem, b_eq, forces, motion, limit=POLISH_LIMIT):
     ``f_t = -alpha dd_t`` exactly, so equilibrium is bilinear:
     ``A_n f_n - sum_v alpha_v A_t,v T_v dq = b``.  The objective is the
     paper's ``|f_n|^2 + |alpha|^2`` (7a)/(11).  Returns the motion, or ``None``.
+    At most :data:`POLISH_ITERATIONS` iterations; ``problem.budget`` is checked after each.
     """
+    problem.budget.check("SLSQP")
     system, d = problem.system, problem.kinematic
     dd = (d @ motion).reshape(-1, 3)
     closed = np.flatnonzero((dd[:, 0] + 1.0 <= 1e-4) | (forces[:, 0] > 1e-9))
@@ -301,6 +304,7 @@ def polish(problem, b_eq, forces, motion, limit=POLISH_LIMIT):
     outcome = minimize(lambda x: float(x[n_y:] @ x[n_y:]), x0,
                        jac=lambda x: np.concatenate([np.zeros(n_y), 2 * x[n_y:]]),
                        method="SLSQP", bounds=bounds, constraints=constraints,
-                       options={"maxiter": POLISH_ITERATIONS, "ftol": 1e-12})
+                       options={"maxiter": POLISH_ITERATIONS, "ftol": 1e-12},
+                       callback=lambda x: problem.budget.check("SLSQP"))
     q = split(outcome.x)[0]
     return q if np.all(np.isfinite(q)) else None

@@ -25,7 +25,9 @@ import math
 import numpy as np
 import scipy.sparse as sp
 import shapely
-from scipy.optimize import Bounds, LinearConstraint, linprog, milp
+from scipy.optimize import Bounds, LinearConstraint, milp
+
+from interlock.verify.statics.equilibrium import TimeLimitReached, highs_lp
 
 __all__ = ["BOUND_MARGIN", "LOOSE", "vertex_reach", "face_cuts", "force_bounds", "relaxation"]
 
@@ -49,7 +51,8 @@ def vertex_reach(problem) -> np.ndarray:
     a_ub, b_ub = problem.allowed_motions
     normal = np.full(s, problem.ratio)
     for v in range(s):
-        outcome = linprog(-d[3 * v].toarray().ravel(), A_ub=a_ub, b_ub=b_ub, bounds=(None, None), method="highs")
+        outcome = highs_lp(-d[3 * v].toarray().ravel(), problem.budget, "the MILP's bounds (vertex reach)",
+                           A_ub=a_ub, b_ub=b_ub, bounds=(None, None))
         if outcome.status == 0:
             normal[v] = -outcome.fun
     normal = normal * (1 + BOUND_MARGIN) + BOUND_MARGIN + 1.0
@@ -105,16 +108,24 @@ def force_bounds(problem, b_eq, work: float) -> np.ndarray:
     for v in range(s):
         cost = np.zeros(3 * s)
         cost[3 * v] = -1.0
-        outcome = linprog(cost, A_ub=a_ub, b_ub=b_ub, A_eq=system.a_eq, b_eq=b_eq, bounds=box, method="highs")
+        outcome = highs_lp(cost, problem.budget, "the MILP's bounds (vertex forces)", A_ub=a_ub, b_ub=b_ub,
+                           A_eq=system.a_eq, b_eq=b_eq, bounds=box)
         if outcome.status == 0:
             bounds[v] = min(cap, -outcome.fun * (1 + BOUND_MARGIN) + BOUND_MARGIN)
     return bounds
 
 
-def relaxation(problem, b_eq, force_bounds, sectors: int, time_limit: float, tightened: bool = True):
+def relaxation(problem, b_eq, force_bounds, sectors: int, nodes: int, tightened: bool = True, work: float = np.inf):
     """Forces and motion of the relaxation, ``None`` if infeasible, or a message if HiGHS did not decide.
 
-    ``force_bounds`` are :func:`force_bounds` for this load, the big Ms of ``f_n``.
+    ``force_bounds`` are :func:`force_bounds` for this load, the big Ms of ``f_n``; ``nodes``: HiGHS'
+    ``node_limit``, past which the MILP is undecided (the same on every machine); HiGHS' ``time_limit`` is the
+    time ``problem.budget`` has left, and running out raises
+    :class:`~interlock.verify.budget.TimeLimitReached`.  ``work``: the most work of the load
+    (``CRAProblem._most_work``), which also bounds the friction: by virtual work ``alpha_v |dd_t,v|^2 <= work``
+    at each vertex, so ``|f_t,v| = alpha_v |dd_t,v| <= work / min_slide`` where the MILP lets it carry friction.
+    That keeps the friction's big M representable for a large ``mu`` (``mu_c M_v`` reached 1e18 at
+    ``mu = 1e15``, beyond HiGHS' largest matrix value).
 
     Beside Eqs. (9)-(10) with big Ms, three families of rows hold for every solution of (11) and
     tighten the relaxation (``tightened``): the virtual-work row ``b.q + sum f_n <= 0``, friction
@@ -135,7 +146,7 @@ def relaxation(problem, b_eq, force_bounds, sectors: int, time_limit: float, tig
     >>> problem = CRAProblem.build(Assembly.from_meshes(walls + [middle], frame=[0, 1]), 0.84)
     >>> b_eq, _ = problem._right_hand_side(np.array([0.0, 0.0, -1.0]))
     >>> work, _ = problem._most_work(b_eq)
-    >>> relaxation(problem, b_eq, force_bounds(problem, b_eq, work), 4, time_limit=10.0) is None
+    >>> relaxation(problem, b_eq, force_bounds(problem, b_eq, work), 4, nodes=100) is None
     True
     """
     system, d = problem.system, problem.kinematic
@@ -149,7 +160,8 @@ def relaxation(problem, b_eq, force_bounds, sectors: int, time_limit: float, tig
     mu_c = -system.cone_rows[0, 0] / math.cos(math.pi / len(system.cone_rows))  # the pyramid's widest |f_t| / f_n
     loose = 1.0 if tightened else LOOSE
     force_bounds = force_bounds * loose
-    big_t = np.maximum(mu_c * force_bounds, 1e-9)
+    friction_cap = loose * (work * (1 + BOUND_MARGIN) + BOUND_MARGIN) / problem.min_slide
+    big_t = np.maximum(np.minimum(mu_c * force_bounds, friction_cap), 1e-9)
     big_n, big_d = problem.reach[:, 0] * loose, problem.reach[:, 1] * loose + problem.min_slide
     d_n, d_u, d_v = d[0::3], d[1::3], d[2::3]
     vertices = np.arange(s)
@@ -212,14 +224,24 @@ def relaxation(problem, b_eq, force_bounds, sectors: int, time_limit: float, tig
     motion_rows = columns(d, oq)  # |dd| <= eta, dd_n >= -eps
     motion_low = np.tile([-1.0, -ratio, -ratio], s)
     integrality = np.concatenate([np.zeros(n_f + n_q), np.ones(n_z + n_s)])
+    stage = f"the MILP with {sectors} sectors"
+    options = {"node_limit": int(nodes), "presolve": True}
+    limit = problem.budget.solver_limit()
+    if limit is not None:
+        problem.budget.check(stage)
+        options["time_limit"] = limit
     outcome = milp(np.zeros(size), integrality=integrality, bounds=Bounds(low, high),
                    constraints=[LinearConstraint(matrix, lower, upper),
                                 LinearConstraint(motion_rows, motion_low, np.full(3 * s, ratio))],
-                   options={"time_limit": time_limit, "presolve": True})
+                   options=options)
     if outcome.status == 2:
         return None
-    if outcome.x is None:
+    if outcome.x is None and "time limit" in str(outcome.message).lower():
+        raise TimeLimitReached(stage)
+    if outcome.x is None and outcome.status == 1:
         return (f"the exact route is too large for this model: HiGHS did not decide the MILP "
-                f"({n_z + n_s} binaries) within time_limit = {time_limit:g} s ({outcome.message})")
+                f"({n_z + n_s} binaries) within milp_nodes = {nodes} nodes ({outcome.message})")
+    if outcome.x is None:
+        return f"HiGHS did not decide the MILP ({n_z + n_s} binaries; solver: {outcome.message})"
     x = outcome.x
     return x[of:of + n_f].reshape(-1, 3), x[oq:oq + n_q]

@@ -45,15 +45,12 @@ scale").  Nothing here can say "unstable": a failure is "inconclusive".
 
 from __future__ import annotations
 
-import time
 from dataclasses import replace
 from functools import partial
 
 import numpy as np
-from scipy.optimize import linprog
-
 from interlock.verify.statics import cra_coulomb, cra_ipopt, cra_local
-from interlock.verify.statics.equilibrium import friction_matrix
+from interlock.verify.statics.equilibrium import TimeLimitReached, friction_matrix, highs_lp
 
 __all__ = ["SPLIT_MOST_BLOCKS", "SPLIT_ROUNDS", "SPLIT_ATTEMPTS", "SCHOLTES", "PLACEMENT_ITERATIONS", "SHUT_TOLS",
            "without_blocks", "split_route", "place_blocks", "named"]
@@ -109,13 +106,12 @@ def without_blocks(problem, blocks):
     return replace(problem, system=rest_system, kinematic=a_eq.T.tocsr()), rows, vertices
 
 
-def split_route(problem, b_eq, blocks, exact, time_limit: float = np.inf, progress=None, seed: int = 0,
-                history=()):
+def split_route(problem, b_eq, blocks, exact, progress=None, seed: int = 0, history=()):
     """``((motion, forces), how)`` solving (11) for the whole, found by holding ``blocks`` out (module
     docstring), or ``(None, why not)``.
 
-    ``exact(problem, b_eq, motion)`` is the exact LP (forces or ``None``) for the rest;
-    ``time_limit`` bounds the rest's Coulomb fixed point, and then the placements (seconds each); ``seed``
+    ``exact(problem, b_eq, motion)`` is the exact LP (forces or ``None``) for the rest; the rest's Coulomb
+    fixed point and the placements are bounded by their rounds and attempts and by ``problem.budget``; ``seed``
     the placements' random starts;
     ``progress(words)``, if given, is told as each stage starts;
     ``history``: the whole's :attr:`~interlock.verify.statics.cra_coulomb.FixedPoint.history`, if the
@@ -133,23 +129,23 @@ def split_route(problem, b_eq, blocks, exact, time_limit: float = np.inf, progre
     restricted = [(thresholds[vertices], step[vertices]) for thresholds, step in history]
     frugal = None if restricted else cra_local.least_friction(rest, b_rest, interior=True)
     proved, how, _ = cra_local.coulomb_route(rest, b_rest, frugal, partial(exact, rest, b_rest), progress=progress,
-                                             time_limit=time_limit, history=restricted)
+                                             history=restricted)
     if proved is None:
         return None, f"holding out {held}: the rest is not proved either ({how})"
     motion = np.zeros(problem.kinematic.shape[1])
     motion[rows] = proved[0]
-    found, words = place_blocks(problem, b_eq, blocks, motion, time_limit, progress, seed)
+    found, words = place_blocks(problem, b_eq, blocks, motion, progress, seed)
     return found, f"holding out {held} (the rest proved by {how}; {words})"
 
 
-def place_blocks(problem, b_eq, blocks, motion, time_limit: float = np.inf, progress=None, seed: int = 0):
+def place_blocks(problem, b_eq, blocks, motion, progress=None, seed: int = 0):
     """``((motion, forces), how)``: ``motion`` with the free blocks ``blocks`` placed so that (11) holds for the
     whole (steps 2 and 3 of the module docstring), or ``(None, why not)``.
 
     ``motion`` (solver units, every free block) is held fixed except at ``blocks``; it should be a proved motion
-    of the rest (:func:`without_blocks`).  ``time_limit`` (seconds for the placements), ``progress`` and ``seed``
-    as for :func:`split_route`.  The whole is judged by the forces of its slack LP, checked residual by residual
-    (step 3): no least-``sum f_n`` LP after it.  At Clarabel's default tolerance (1e-8) those forces failed the
+    of the rest (:func:`without_blocks`).  ``progress`` and ``seed`` as for :func:`split_route`; at most
+    :data:`SPLIT_ATTEMPTS` IPOPT solves and :data:`SPLIT_ROUNDS` checks, and ``problem.budget``.  The whole is
+    judged by the forces of its slack LP, checked residual by residual (step 3): no least-``sum f_n`` LP after it.  At Clarabel's default tolerance (1e-8) those forces failed the
     check at the armadillo's certificate; at :data:`~interlock.verify.statics.cra_coulomb.CHECKED_TOLERANCE` they
     pass, in 0.6 s where HiGHS' simplex took 4-13 s for the slack LP and 12 s for the exact one.
     """
@@ -157,8 +153,9 @@ def place_blocks(problem, b_eq, blocks, motion, time_limit: float = np.inf, prog
     placement = _Placement.build(problem, b_eq, motion, rows, ~kept_contacts[problem.system.vertex_contact])
     b_rest = b_eq[rows]
     rng = np.random.default_rng(seed)
-    start, cuts, checked, attempt, began = None, [], 0, 0, time.perf_counter()
-    while attempt < SPLIT_ATTEMPTS and checked < SPLIT_ROUNDS and time.perf_counter() - began <= time_limit:
+    start, cuts, checked, attempt = None, [], 0, 0
+    while attempt < SPLIT_ATTEMPTS and checked < SPLIT_ROUNDS:
+        problem.budget.check(f"placing {named(blocks)}")
         attempt += 1
         if progress is not None:
             progress(f"placing {named(blocks)}, attempt {attempt}")
@@ -243,13 +240,18 @@ class _Placement:
                                 np.full(len(cuts), -np.inf)])
         upper = np.concatenate([np.zeros(k), np.full(n, np.inf), np.zeros((sides + 1) * n), np.full(3 * n, self.ratio),
                                 np.zeros(len(cuts))])
+        stage, budget = "placing the held-out blocks (IPOPT)", self.problem.budget
+        options, clock = cra_ipopt.deadline_options(budget, stage, x.numel(), constraints.numel(), 1)
         solver = ca.nlpsol("placement", "ipopt", {"x": x, "f": ca.sum1(normal), "g": constraints, "p": tau},
                            {"ipopt.print_level": 0, "print_time": 0, "ipopt.sb": "yes",
-                            "ipopt.max_iter": PLACEMENT_ITERATIONS, "ipopt.tol": 1e-10})
+                            "ipopt.max_iter": PLACEMENT_ITERATIONS, "ipopt.tol": 1e-10, **options})
         point = start
         for relaxation in SCHOLTES:
             point = np.asarray(solver(x0=point, p=relaxation, lbg=lower, ubg=upper,
                                       lbx=np.concatenate([np.full(k, -np.inf), np.zeros(2 * n)]))["x"]).ravel()
+            if cra_ipopt.timed_out(str(solver.stats()["return_status"]), budget):
+                raise TimeLimitReached(stage)
+        del clock
         return point, solver.stats()["return_status"] in ("Solve_Succeeded", "Solved_To_Acceptable_Level")
 
     def shut(self, x):
@@ -278,10 +280,11 @@ class _Placement:
         if not columns.any():
             return False
         pyramid = lp.a_ub[np.repeat(self.vertices[lp.sliding], len(self.cone_rows))][:, columns]
-        outcome = linprog(lp.cost[columns], A_ub=pyramid if pyramid.shape[0] else None,
-                          b_ub=np.zeros(pyramid.shape[0]) if pyramid.shape[0] else None,
-                          A_eq=lp.a_eq[self.dofs][:, columns], b_eq=self.b_held * self.scale,
-                          bounds=(0, None), method="highs")  # the whole's units, as its exact LP sees them
+        outcome = highs_lp(lp.cost[columns], self.problem.budget, "placing the held-out blocks",
+                           A_ub=pyramid if pyramid.shape[0] else None,
+                           b_ub=np.zeros(pyramid.shape[0]) if pyramid.shape[0] else None,
+                           A_eq=lp.a_eq[self.dofs][:, columns], b_eq=self.b_held * self.scale,
+                           bounds=(0, None))  # the whole's units, as its exact LP sees them
         return outcome.status == 0
 
     def cut(self, y_rest, b_rest):

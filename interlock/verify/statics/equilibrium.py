@@ -20,13 +20,15 @@ from scipy.optimize import linprog
 from interlock.blocks.assembly import Assembly
 from interlock.errors import InterlockError
 from interlock.files import json_float
+from interlock.verify.budget import Budget, TimeLimitReached
 from interlock.verify.check import SOLVER_THREADS
 from interlock.verify.statics.interfaces import statics_contacts
 
 __all__ = ["StabilityError", "StabilityResult", "EquilibriumSystem", "equilibrium_matrix", "friction_block",
            "friction_matrix", "friction_utilisation", "gravity_vector", "nonnegative", "positive",
            "block_densities", "json_float", "CONES", "DEFAULT_SIDES", "LARGE_LP", "DEFAULT_EPS", "DEFAULT_ETA",
-           "FRICTION_RTOL", "contact_words", "clarabel_lp", "clarabel_solve"]
+           "FRICTION_RTOL", "MU_MIN", "MU_MAX", "RBE_ITERATIONS", "contact_words", "clarabel_lp", "clarabel_solve",
+           "friction_coefficient", "highs_lp", "Budget", "TimeLimitReached"]
 
 #: Linearised friction cones: "paper" circumscribes the Coulomb cone (App. B, faces tangent to it, so it
 #: allows up to 1/cos(pi/sides) more friction between its faces), "inner" is inscribed (conservative).
@@ -49,6 +51,20 @@ DEFAULT_ETA = 1e-3
 #: 1e-6 / 1e-5 / 1e-4 of it gives 1.08267 / 1.082413 / 1.082394 (paper; the octagon's bound 1.082392) and
 #: 1.00016 / 1.000012 / 1.000002 (inner, bound 1).
 FRICTION_RTOL = 1e-5
+#: The friction coefficients the solvers represent: 0 (no friction) or ``MU_MIN <= mu <= MU_MAX``.  A squeeze held
+#: by friction needs normal forces of ``1 / mu`` times the load: three unit cubes in a row with the ends fixed are
+#: RBE-stable for every ``mu > 0``, and HiGHS finds it down to ``mu = 1e-6`` (forces 5e5 times the weight) but calls
+#: it infeasible at ``1e-9``, where the forces' differences fall below double precision at its ``1e-7``
+#: tolerance.  Above ``MU_MAX`` a friction row's ``mu`` reaches HiGHS' largest matrix value (1e15: "Model
+#: error"); the rows are scaled to ``(-1, cos a / mu, sin a / mu)`` for ``mu > 1``, so up to ``MU_MAX`` friction is
+#: represented, and beyond about ``1e9`` it is unbounded to the solvers' precision.
+MU_MIN = 1e-6
+MU_MAX = 1e15
+#: Most iterations of one HiGHS LP of RBE (``maxiter``, simplex or interior point), so that a stalled solve ends
+#: the same way on every machine: the LP goes to the next solver, and if none decides the answer is "inconclusive
+#: (solver: ...)".  The largest RBE LP decided in the tests (the armadillo's 31,000 unknowns) takes about 9,000
+#: simplex iterations.
+RBE_ITERATIONS = 50_000
 
 
 class StabilityError(InterlockError):
@@ -61,8 +77,9 @@ class StabilityResult:
 
     Attributes
     ----------
-    stable : bool
-        An equilibrium with compressive, friction-admissible contact forces exists (Eqs. (1), (2), (5)).
+    stable : bool or None
+        An equilibrium with compressive, friction-admissible contact forces exists (Eqs. (1), (2), (5)); ``None``
+        when no solver decided (a solver's error, an iteration or the time limit): "inconclusive", never a guess.
     forces : ndarray (s, 3)
         Per contact vertex ``(f_n, f_u, f_v)`` in the contact's frame ``(normal, basis[0], basis[1])``,
         acting on block ``j`` (block ``i`` receives the opposite); NaN when unstable.
@@ -84,8 +101,11 @@ class StabilityResult:
         (about 1e-5). Not a safety factor: the forces minimise ``sum f_n`` and sit on the pyramid's
         faces wherever friction helps.
     status : int
-        ``scipy.optimize.linprog`` status (0 solved, 2 infeasible).
+        0 solved, 2 infeasible (no equilibrium); otherwise undecided (the last solver's status, as
+        ``scipy.optimize.linprog`` numbers them).
     message : str
+        The deciding solver's words; for an undecided answer ``"solver: ..."`` (what each solver said) or
+        ``"time limit reached in <stage>"``.
     contacts : tuple of Contact
     parameters : dict
         ``mu``, ``cone``, ``sides``, ``density``, ``gravity``, ``frame``, and ``contacts``: how the
@@ -95,7 +115,7 @@ class StabilityResult:
         Seconds spent on ``contacts``, ``build`` and ``solve``.
     """
 
-    stable: bool
+    stable: bool | None
     forces: np.ndarray
     vertex_contact: np.ndarray
     points: np.ndarray
@@ -109,9 +129,9 @@ class StabilityResult:
     timings: dict = field(default_factory=dict)
 
     def __str__(self) -> str:
-        verdict = "stable" if self.stable else "unstable"
+        verdict = {True: "stable", False: "unstable"}.get(self.stable, f"inconclusive ({self.message})")
         p = self.parameters
-        extra = f", friction utilisation {self.friction_utilisation:.3g}" if self.stable else ""
+        extra = f", friction utilisation {self.friction_utilisation:.3g}" if self.stable is True else ""
         return (f"RBE {verdict} (mu {p.get('mu')}, {p.get('cone')} cone with {p.get('sides')} sides): "
                 f"{len(self.contacts)} contacts{contact_words(p)}, {len(self.forces)} vertex forces{extra}; "
                 f"{sum(self.timings.values()):.3g} s")
@@ -150,7 +170,7 @@ class EquilibriumSystem:
     def build(cls, assembly, mu, density, frame, cone, sides, contacts) -> EquilibriumSystem:
         if not isinstance(assembly, Assembly):
             raise StabilityError(f"expected an interlock Assembly, got {type(assembly).__name__}")
-        mu, density = nonnegative("mu", mu), block_densities(density, len(assembly))
+        mu, density = friction_coefficient(mu), block_densities(density, len(assembly))
         if cone not in CONES:
             raise StabilityError(f"cone must be one of {CONES}, got {cone!r}")
         if isinstance(sides, bool) or not isinstance(sides, (int, np.integer)) or sides < (4 if cone == "paper" else 3):
@@ -187,63 +207,86 @@ class EquilibriumSystem:
         return cls(a_eq, a_ub, cone_rows, cost, bounds, weights, arms, free, frames, points, vertex_contact, used,
                    parameters, timings)
 
-    def solve_lp(self, gravity: np.ndarray, least_force: bool):
-        """HiGHS on ``A_eq f = -p / W``, ``A_fr f <= 0``, ``f_n >= 0`` (``W``: total weight).
+    def solve_lp(self, gravity: np.ndarray, least_force: bool, budget: Budget | None = None):
+        """``(x, status, message, total)`` of ``A_eq f = -p / W``, ``A_fr f <= 0``, ``f_n >= 0`` (``W``: total weight).
 
-        With ``least_force`` the objective is ``sum f_n``; HiGHS's simplex sometimes stops undecided on
-        it (status 4 on the shelf), so the interior-point method and then the plain feasibility problem
-        (objective 0) are tried next.  Without it, only the feasibility problem is solved.
+        Clarabel (interior point) decides first: on a 69-block p4 patch HiGHS' simplex took 13-60 s to find the
+        LP infeasible, depending only on the order of the vertices (the same patch read from COMPAS JSON or OBJ),
+        Clarabel 0.07 s.  With ``least_force`` and a feasible LP of at most :data:`LARGE_LP` unknowns, HiGHS'
+        simplex then finds the vertex of least ``sum f_n`` (forces on the pyramid's faces; Clarabel's forces are
+        kept if it does not).  If Clarabel does not decide, HiGHS' interior point and simplex are asked in turn
+        (each within :data:`RBE_ITERATIONS`).  ``status`` is 0 (solved), 2 (infeasible) or, when no solver
+        decided, the last one's status with ``message`` ``"solver: ..."`` saying what each said.  ``budget``
+        bounds every solve (:class:`~interlock.verify.budget.TimeLimitReached` when it runs out).
         """
+        budget = budget or Budget()
         load = np.outer(self.weights, gravity)
         total = float(np.abs(load).sum()) or 1.0
         b_eq = -np.hstack([load, self.arms]).ravel() / total
         if not self.a_eq.shape[1]:
             solved = bool(np.allclose(b_eq, 0.0))
             return None, (0 if solved else 2), ("no contact forces" if solved else "no contacts carry the load"), total
-        if self.a_eq.shape[1] > LARGE_LP:
-            decided = self._clarabel(b_eq, least_force)
-            if decided is not None:
-                return (*decided, total)
-        attempts = [(self.cost, "highs"), (self.cost, "highs-ipm")] if least_force else []
-        attempts.append((np.zeros_like(self.cost), "highs"))
-        for cost, method in attempts:
-            outcome = linprog(cost, A_ub=self.a_ub, b_ub=np.zeros(self.a_ub.shape[0]), A_eq=self.a_eq, b_eq=b_eq,
-                              bounds=self.bounds, method=method)
+        said = []
+        decided = self._clarabel(b_eq, least_force, budget)
+        if isinstance(decided, str):
+            said.append(decided)
+        elif decided[1] == 2 or not least_force or self.a_eq.shape[1] > LARGE_LP:
+            return (*decided, total)
+        else:
+            outcome = self._highs(self.cost, b_eq, "highs", budget)
+            return (outcome.x, 0, str(outcome.message), total) if outcome.status == 0 else (*decided, total)
+        status = 4
+        for cost, method in ((self.cost, "highs-ipm"), (np.zeros_like(self.cost), "highs")):
+            outcome = self._highs(cost, b_eq, method, budget)
             if outcome.status in (0, 2):
                 return outcome.x, int(outcome.status), str(outcome.message), total
-        raise StabilityError(f"HiGHS did not decide the RBE problem (status {outcome.status}: {outcome.message})")
+            status = int(outcome.status)
+            said.append(f"HiGHS {'interior point' if method == 'highs-ipm' else 'simplex'}: {outcome.message}")
+        return None, status, "solver: " + "; ".join(said), total
 
-    def _clarabel(self, b_eq, least_force: bool):
-        """The same LP by Clarabel's interior point (large models: the armadillo's 31,000 unknowns in 0.7 s
-        against 40 s for HiGHS' simplex); ``(x, status, message)``, or ``None`` when it does not decide."""
+    def _highs(self, cost, b_eq, method: str, budget: Budget):
+        return highs_lp(cost, budget, "RBE", A_ub=self.a_ub, b_ub=np.zeros(self.a_ub.shape[0]), A_eq=self.a_eq,
+                        b_eq=b_eq, bounds=self.bounds, method=method, options={"maxiter": RBE_ITERATIONS})
+
+    def _clarabel(self, b_eq, least_force: bool, budget: Budget):
+        """The LP by Clarabel's interior point (the armadillo's 31,000 unknowns in 0.7 s against 40 s for HiGHS'
+        simplex); ``(x, status, message)``, or what Clarabel said when it does not decide."""
         n = self.a_eq.shape[1]
         normal = np.flatnonzero(self.bounds[:, 0] == 0.0)
         nonnegative = sp.csr_matrix((-np.ones(len(normal)), (np.arange(len(normal)), normal)), shape=(len(normal), n))
         constraints = sp.vstack([self.a_eq, self.a_ub, nonnegative], format="csc")
         right = np.concatenate([b_eq, np.zeros(self.a_ub.shape[0] + len(normal))])
         cost = self.cost if least_force else np.zeros(n)
-        solution = clarabel_lp(cost, constraints, right, equalities=self.a_eq.shape[0])
+        solution = clarabel_lp(cost, constraints, right, equalities=self.a_eq.shape[0], budget=budget, stage="RBE")
         status = str(solution.status)
         if status == "Solved":
             return np.asarray(solution.x), 0, "Clarabel: solved"
         if status == "PrimalInfeasible":
             return None, 2, "Clarabel: infeasible (no equilibrium)"
-        return None
+        return f"Clarabel: {status}"
 
-    def feasible(self, gravity: np.ndarray) -> bool:
-        return self.solve_lp(gravity, least_force=False)[1] == 0
+    def feasible(self, gravity: np.ndarray, budget: Budget | None = None) -> tuple[bool | None, str]:
+        """``(verdict, message)``: whether an equilibrium exists under ``gravity`` (``None``: undecided, the
+        message says why; the time limit raises :class:`~interlock.verify.budget.TimeLimitReached`)."""
+        _, status, message, _ = self.solve_lp(gravity, least_force=False, budget=budget)
+        return {0: True, 2: False}.get(status), message
 
-    def solve(self, gravity: np.ndarray) -> StabilityResult:
+    def solve(self, gravity: np.ndarray, budget: Budget | None = None) -> StabilityResult:
         started = time.perf_counter()
-        x, status, message, total = self.solve_lp(gravity, least_force=True)
+        try:
+            if budget is not None:
+                budget.check("the contacts")
+            x, status, message, total = self.solve_lp(gravity, least_force=True, budget=budget)
+        except TimeLimitReached as out:
+            x, status, message, total = None, 1, str(out), 1.0
         timings = {**self.timings, "solve": time.perf_counter() - started}
         parameters = {**self.parameters, "gravity": gravity.tolist()}
-        stable = status == 0
+        stable = {0: True, 2: False}.get(status)
         count = len(self.points)
-        if stable and x is not None:
+        if stable is True and x is not None:
             forces = x.reshape(-1, 3) * total
         else:
-            forces = np.full((count, 3), np.nan if not stable else 0.0)
+            forces = np.full((count, 3), 0.0 if stable is True else np.nan)
         world = np.einsum("sk,skd->sd", forces, self.frames)
         resultants = np.zeros((len(self.contacts), 3))
         np.add.at(resultants, self.vertex_contact, world)
@@ -253,15 +296,16 @@ class EquilibriumSystem:
         np.add.at(moments, self.vertex_contact, forces[:, :1] * self.points)
         with np.errstate(invalid="ignore", divide="ignore"):
             centres = np.where(normal_sum[:, None] > 0, moments / normal_sum[:, None], np.nan)
-        utilisation = friction_utilisation(forces, self.parameters["mu"]) if stable else math.nan
+        utilisation = friction_utilisation(forces, self.parameters["mu"]) if stable is True else math.nan
         return StabilityResult(stable, forces, self.vertex_contact, self.points, resultants, centres, utilisation,
                                status, message, self.contacts, parameters, timings)
 
 
-def clarabel_lp(cost, constraints, right, equalities: int = 0, tolerance: float | None = None):
+def clarabel_lp(cost, constraints, right, equalities: int = 0, tolerance: float | None = None,
+                budget: Budget | None = None, stage: str = "an LP"):
     """Clarabel's interior point on ``min cost . x`` subject to ``constraints x = right`` on the first
     ``equalities`` rows and ``<= right`` on the rest; Clarabel's solution (``status``, ``x``, ``z``).
-    ``tolerance``: as for :func:`clarabel_solve`.
+    ``tolerance``, ``budget`` and ``stage``: as for :func:`clarabel_solve`.
 
     The large LPs of statics go here (RBE above :data:`LARGE_LP` unknowns, CRA on large models): the
     armadillo's 31,000 unknowns in 0.7 s against 40 s for HiGHS' simplex.
@@ -274,16 +318,19 @@ def clarabel_lp(cost, constraints, right, equalities: int = 0, tolerance: float 
 
     cones = ([clarabel.ZeroConeT(equalities)] if equalities else []) + \
         [clarabel.NonnegativeConeT(constraints.shape[0] - equalities)]
-    return clarabel_solve(None, cost, constraints, right, cones, tolerance)
+    return clarabel_solve(None, cost, constraints, right, cones, tolerance, budget, stage)
 
 
-def clarabel_solve(quadratic, cost, constraints, right, cones, tolerance: float | None = None):
+def clarabel_solve(quadratic, cost, constraints, right, cones, tolerance: float | None = None,
+                   budget: Budget | None = None, stage: str = "a cone program"):
     """Clarabel on ``min x.Q x / 2 + cost . x`` subject to ``right - constraints x`` in ``cones`` (Clarabel's
     cone objects), quietly and on :data:`~interlock.verify.check.SOLVER_THREADS` threads; ``quadratic`` ``Q``
     may be ``None`` (an LP).  The one place the statics set Clarabel up (:func:`clarabel_lp`, and the cone
     program of :func:`~interlock.verify.statics.cra_coulomb.tresca`).  ``tolerance``, if given, replaces
     Clarabel's gap and feasibility tolerances (1e-8 by default; solutions that must pass an exact check use
-    :data:`~interlock.verify.statics.cra_coulomb.CHECKED_TOLERANCE`)."""
+    :data:`~interlock.verify.statics.cra_coulomb.CHECKED_TOLERANCE`).  ``budget``: Clarabel's ``time_limit`` is
+    the time it has left; running out raises :class:`~interlock.verify.budget.TimeLimitReached` naming
+    ``stage``.  Clarabel's iteration limit (200) keeps the solve bounded on every machine."""
     import clarabel
 
     n = constraints.shape[1]
@@ -292,9 +339,49 @@ def clarabel_solve(quadratic, cost, constraints, right, cones, tolerance: float 
     settings.max_threads = SOLVER_THREADS
     if tolerance is not None:
         settings.tol_gap_abs = settings.tol_gap_rel = settings.tol_feas = tolerance
+    limit = None if budget is None else budget.solver_limit()
+    if limit is not None:
+        budget.check(stage)
+        settings.time_limit = limit
     quadratic = sp.csc_matrix((n, n)) if quadratic is None else sp.csc_matrix(quadratic)
-    return clarabel.DefaultSolver(quadratic, np.asarray(cost, dtype=float), sp.csc_matrix(constraints),
-                                  np.asarray(right, dtype=float), cones, settings).solve()
+    solution = clarabel.DefaultSolver(quadratic, np.asarray(cost, dtype=float), sp.csc_matrix(constraints),
+                                      np.asarray(right, dtype=float), cones, settings).solve()
+    if str(solution.status) == "MaxTime":
+        raise TimeLimitReached(stage)
+    return solution
+
+
+def highs_lp(cost, budget: Budget | None, stage: str, **problem):
+    """:func:`scipy.optimize.linprog` (HiGHS) on ``problem`` with the time ``budget`` has left as its
+    ``time_limit``; running out raises :class:`~interlock.verify.budget.TimeLimitReached` naming ``stage``.
+    ``problem``: linprog's keywords (``options`` are kept; ``method`` defaults to ``"highs"``).
+
+    >>> highs_lp([1.0], Budget.start(60), "an LP", bounds=[(2.0, None)]).x.tolist()
+    [2.0]
+    """
+    options = dict(problem.pop("options", None) or {})
+    limit = None if budget is None else budget.solver_limit()
+    if limit is not None:
+        budget.check(stage)
+        options["time_limit"] = limit
+    problem.setdefault("method", "highs")
+    outcome = linprog(cost, options=options, **problem)
+    if outcome.status == 1 and "time limit" in str(outcome.message).lower():
+        raise TimeLimitReached(stage)
+    return outcome
+
+
+def friction_coefficient(mu) -> float:
+    """``mu`` as a float if the solvers represent it (0, or :data:`MU_MIN` to :data:`MU_MAX`), else
+    :class:`StabilityError` saying why and what is accepted."""
+    mu = nonnegative("mu", mu)
+    if mu and not MU_MIN <= mu <= MU_MAX:
+        why = (f"friction below {MU_MIN:g} needs forces above {1 / MU_MIN:g} times the weight, beyond double "
+               f"precision at the solvers' tolerance" if mu < MU_MIN else
+               f"above {MU_MAX:g} friction is unbounded to double precision and the solvers' matrices overflow")
+        raise StabilityError(f"mu = {mu:g} is outside the range the solvers represent ({why}): give mu = 0 (no "
+                             f"friction) or {MU_MIN:g} <= mu <= {MU_MAX:g}")
+    return mu
 
 
 def equilibrium_matrix(assembly, used, vertex_contact, points, frames, column_of, length) -> sp.csr_matrix:
@@ -339,8 +426,11 @@ def friction_block(mu: float, cone: str, sides: int) -> np.ndarray:
 
 
 def friction_matrix(count: int, block: np.ndarray) -> sp.csr_matrix:
-    """``A_fr`` (Eq. (5), App. B): ``block`` (:func:`friction_block`) once per vertex."""
-    return sp.kron(sp.eye(count, format="csr"), sp.csr_matrix(block), format="csr")
+    """``A_fr`` (Eq. (5), App. B): ``block`` (:func:`friction_block`) once per vertex, each row divided by its
+    largest coefficient (``mu`` when ``mu > 1``), so that a large ``mu`` stays within the solvers' range
+    (:data:`MU_MAX`)."""
+    scaled = block / np.maximum(np.abs(block[:, :1]), 1.0)
+    return sp.kron(sp.eye(count, format="csr"), sp.csr_matrix(scaled), format="csr")
 
 
 def friction_utilisation(forces: np.ndarray, mu: float, rtol: float = FRICTION_RTOL) -> float:

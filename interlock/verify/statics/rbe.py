@@ -3,14 +3,14 @@
 from __future__ import annotations
 
 from interlock.blocks.assembly import Assembly
-from interlock.verify.statics.equilibrium import (DEFAULT_SIDES, EquilibriumSystem, StabilityResult,
+from interlock.verify.statics.equilibrium import (DEFAULT_SIDES, Budget, EquilibriumSystem, StabilityResult,
                                                   gravity_vector)
 
 __all__ = ["rbe"]
 
 
 def rbe(assembly: Assembly, mu: float, density: float = 1.0, gravity=(0.0, 0.0, -1.0), frame=None,
-        cone: str = "paper", sides: int = DEFAULT_SIDES, contacts=None) -> StabilityResult:
+        cone: str = "paper", sides: int = DEFAULT_SIDES, contacts=None, time_limit=None) -> StabilityResult:
     """Rigid-block equilibrium: can contact forces carry the self-weight? (CRA paper, Eqs. (1)-(5)).
 
     Unknowns are forces at the contact-polygon vertices ``c`` in each contact's
@@ -42,7 +42,8 @@ def rbe(assembly: Assembly, mu: float, density: float = 1.0, gravity=(0.0, 0.0, 
     ----------
     assembly : Assembly
     mu : float
-        Friction coefficient, ``>= 0``.
+        Friction coefficient: 0, or between :data:`~interlock.verify.statics.equilibrium.MU_MIN` (1e-6) and
+        :data:`~interlock.verify.statics.equilibrium.MU_MAX` (1e15), the range the solvers represent.
     density : float or array (n,)
         Weight per volume, ``> 0``; one value, or one per block (loads carried by heavier blocks,
         e.g. the bridge's 3.51 on nodes 11-15).
@@ -61,6 +62,10 @@ def rbe(assembly: Assembly, mu: float, density: float = 1.0, gravity=(0.0, 0.0, 
         faces that touch (what :func:`~interlock.verify.check` uses); or contacts given, e.g. from
         :func:`~interlock.verify.statics.interfaces.compas_interfaces`.  ``parameters["contacts"]``
         records which, with the tolerances.
+    time_limit : float, optional
+        Seconds for the whole call (contacts and solves; default: no limit).  When they run out the answer is
+        "inconclusive" (``stable`` is ``None``, ``message`` "time limit reached in <stage>").  The clock never
+        changes a verdict otherwise: each solver also has an iteration limit.
 
     Returns
     -------
@@ -69,13 +74,18 @@ def rbe(assembly: Assembly, mu: float, density: float = 1.0, gravity=(0.0, 0.0, 
     Raises
     ------
     StabilityError
-        Bad ``mu``, ``density``, ``gravity``, ``cone`` or ``sides``; no frame; not an assembly.
+        Bad ``mu`` (outside the solvers' range too), ``density``, ``gravity``, ``cone`` or ``sides``; no frame;
+        not an assembly.
+    InterlockError
+        ``time_limit`` not a number of seconds > 0.
 
     Notes
     -----
     One sparse LP with ``3 s`` unknowns, ``6 (free blocks)`` equalities and
-    ``sides * s`` inequalities for ``s`` contact vertices, solved by HiGHS
-    (by Clarabel first above :data:`LARGE_LP` unknowns).
+    ``sides * s`` inequalities for ``s`` contact vertices.  Clarabel decides it;
+    on models up to :data:`~interlock.verify.statics.equilibrium.LARGE_LP` unknowns HiGHS' simplex then finds
+    the forces of least ``sum f_n``.  A solver that does not decide hands over to the next (HiGHS' interior
+    point, then its simplex); when none does, the answer is "inconclusive (solver: ...)", never "unstable".
     Lengths are divided by the model size and loads by the total weight.
 
     Examples
@@ -87,5 +97,7 @@ def rbe(assembly: Assembly, mu: float, density: float = 1.0, gravity=(0.0, 0.0, 
     >>> rbe(stack, mu=0.5).stable, rbe(stack, mu=0.5, gravity=tilted_gravity("x", 30)).stable
     (True, False)
     """
+    budget = Budget.start(time_limit)
+    gravity = gravity_vector(gravity)
     system = EquilibriumSystem.build(assembly, mu, density, frame, cone, sides, contacts)
-    return system.solve(gravity_vector(gravity))
+    return system.solve(gravity, budget)
