@@ -13,7 +13,7 @@ from __future__ import annotations
 import json
 import os
 import warnings
-from concurrent.futures import Executor, ProcessPoolExecutor, as_completed
+from concurrent.futures import FIRST_COMPLETED, Executor, ProcessPoolExecutor, wait
 from pathlib import Path
 
 import interlock
@@ -22,7 +22,7 @@ from interlock.files import atomic_write, unwritable, write_atomically
 from interlock.sweep.record import evaluate_chunk
 from interlock.sweep.spec import SweepError, SweepSpec, load_spec
 
-__all__ = ["run", "read_records", "check_size", "SweepWarning", "MAX_POINTS", "HEADER_KEY"]
+__all__ = ["run", "read_records", "check_size", "SweepWarning", "MAX_POINTS", "HEADER_KEY", "AHEAD"]
 
 FORMATS = (".jsonl", ".parquet")
 #: The most points :func:`run` evaluates unless ``max_points`` says more: each point and its record take
@@ -30,6 +30,9 @@ FORMATS = (".jsonl", ".parquet")
 MAX_POINTS = 1_000_000
 #: Memory per point (the point, its record and its future), measured on p4 sweeps: about 1 KB.
 BYTES_PER_POINT = 1_000
+#: Chunks handed to the executor ahead of their results: the points are made as chunks are submitted, so
+#: a run holds at most this many chunks of points (and their records, unless kept), whatever the sweep's size.
+AHEAD = 1024
 #: The key of the first line of a JSON lines output (and of ``sweep.json`` in a Parquet folder): the spec's
 #: name, :attr:`~interlock.sweep.spec.SweepSpec.fingerprint`, number of points and interlock's version.
 HEADER_KEY = "sweep"
@@ -42,8 +45,12 @@ class SweepWarning(UserWarning):
 
 
 def run(spec, output=None, executor=None, workers: int | None = None, resume: bool = False,
-        progress=None, max_points: int = MAX_POINTS) -> list[dict]:
+        progress=None, max_points: int = MAX_POINTS, keep: bool = True) -> list[dict]:
     """Evaluate every point of ``spec``; return all records, sorted by ``index``.
+
+    The points are made as they are handed out (:meth:`~interlock.sweep.spec.SweepSpec.iter_points`), at most
+    :data:`AHEAD` chunks before their results, so a run starts at once and, with ``keep=False``, its memory
+    does not grow with the sweep.
 
     Parameters
     ----------
@@ -67,6 +74,9 @@ def run(spec, output=None, executor=None, workers: int | None = None, resume: bo
         of points kept from ``output`` (so that a progress bar over all points reaches its total).
     max_points : int
         Refuse a spec with more points than this (default :data:`MAX_POINTS`), before making them.
+    keep : bool
+        Return every record (default).  False: return none (read them from ``output`` with
+        :func:`read_records`), so memory stays bounded however many points the sweep has.
 
     Raises
     ------
@@ -85,15 +95,17 @@ def run(spec, output=None, executor=None, workers: int | None = None, resume: bo
     """
     spec = spec if isinstance(spec, SweepSpec) else load_spec(spec)
     check_size(spec, max_points)
-    points = spec.points()
+    if not isinstance(keep, bool):
+        raise SweepError(f"keep must be True or False, got {keep!r}")
     writer = None if output is None else _writer(Path(output), resume)
-    done = {} if writer is None else _kept(writer, spec, points)
+    done = {} if writer is None else _kept(writer, spec)
     if writer is not None:
         writer.start(spec)
-    todo = [(i, p) for i, p in enumerate(points) if i not in done]
-    chunks = [todo[k:k + spec.chunk] for k in range(0, len(todo), spec.chunk)]
+    skipped = set(done)
     if done and progress is not None:
         progress(len(done))
+    if not keep:
+        done = {}
     owned = executor is None
     if owned:
         executor = ProcessPoolExecutor(max_workers=workers or os.cpu_count())
@@ -102,20 +114,48 @@ def run(spec, output=None, executor=None, workers: int | None = None, resume: bo
     elif not isinstance(executor, Executor):
         raise SweepError(f"executor must be a concurrent.futures.Executor or a dask.distributed.Client, "
                          f"got {type(executor).__name__}")
-    try:
-        futures = [executor.submit(evaluate_chunk, spec, chunk) for chunk in chunks]
-        for future in as_completed(futures):
+
+    def finish(finished) -> None:
+        for future in finished:
             records = future.result()
-            for record in records:
-                done[record["index"]] = record
+            if keep:
+                for record in records:
+                    done[record["index"]] = record
             if writer is not None:
                 writer.write(records)
             if progress is not None:
                 progress(len(records))
+
+    pending = set()
+    try:
+        for chunk in _chunks(spec, skipped):
+            pending.add(executor.submit(evaluate_chunk, spec, chunk))
+            if len(pending) >= AHEAD:
+                finished, pending = wait(pending, return_when=FIRST_COMPLETED)
+                finish(finished)
+        while pending:
+            finished, pending = wait(pending, return_when=FIRST_COMPLETED)
+            finish(finished)
     finally:
+        for future in pending:
+            future.cancel()
         if owned:
             executor.shutdown(cancel_futures=True)
     return [done[i] for i in sorted(done)]
+
+
+def _chunks(spec: SweepSpec, skipped: set):
+    """Lists of ``spec.chunk`` points ``(index, parameters)`` not in ``skipped``, made as they are asked for."""
+    chunk = []
+    for index, point in enumerate(spec.iter_points()):
+        if index in skipped:
+            continue
+        chunk.append((index, point))
+        if len(chunk) == spec.chunk:
+            yield chunk
+            chunk = []
+    if chunk:
+        yield chunk
 
 
 def check_size(spec: SweepSpec, max_points: int = MAX_POINTS) -> int:
@@ -173,7 +213,7 @@ def _header(spec: SweepSpec) -> dict:
                          "interlock": interlock.__version__}}
 
 
-def _kept(writer, spec: SweepSpec, points: list[dict]) -> dict:
+def _kept(writer, spec: SweepSpec) -> dict:
     """The records of an output that is resumed, after checking that they are this spec's."""
     header = writer.header
     if writer.records or header is not None:
@@ -183,11 +223,19 @@ def _kept(writer, spec: SweepSpec, points: list[dict]) -> dict:
                     if stored else "records without a spec fingerprint (an older interlock, or not a sweep)")
             raise SweepError(f"{writer.path} holds {what}, not of {spec.name} (fingerprint {spec.fingerprint}); "
                              "choose another output")
-    for record in writer.records:
-        index = record["index"]
-        if not (isinstance(index, int) and 0 <= index < len(points)) or record.get("parameters") != points[index]:
-            raise SweepError(f"{writer.path} holds a record for point {index} at {record.get('parameters')}, but "
-                             f"the spec's point {index} is {points[index] if 0 <= index < len(points) else 'none'}: "
+    records = sorted(writer.records, key=lambda r: r["index"] if isinstance(r["index"], int) else -1)
+    points = enumerate(spec.iter_points())
+    index, point = -1, None
+    for record in records:
+        wanted = record["index"]
+        if isinstance(wanted, int) and 0 <= wanted < spec.size:
+            while index < wanted:
+                index, point = next(points)
+        else:
+            point = None
+        if point is None or record.get("parameters") != point:
+            raise SweepError(f"{writer.path} holds a record for point {wanted} at {record.get('parameters')}, but "
+                             f"the spec's point {wanted} is {point if point is not None else 'none'}: "
                              "the output belongs to another spec; choose another output")
     return {r["index"]: r for r in writer.records}
 

@@ -45,10 +45,10 @@ number >= 0 (also among a parameter's values) is a :class:`SweepError`.
 from __future__ import annotations
 
 import hashlib
-import itertools
 import json
 import math
 import sys
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -61,7 +61,7 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover - Python 3.10
     import tomli as tomllib
 
-__all__ = ["SweepError", "SweepSpec", "Parameter", "load_spec", "VERDICTS", "MAX_STEPS"]
+__all__ = ["SweepError", "SweepSpec", "Parameter", "load_spec", "VERDICTS", "MAX_STEPS", "SAMPLE_BLOCK", "Steps"]
 
 #: The verdicts a sweep can compute, and what they call.
 VERDICTS = {
@@ -80,10 +80,48 @@ TOP_KEYS = {"group", "tiling", "verdicts", "parameters", "points", "samples", "s
 #: The most values one parameter's range may be cut into (``steps``): ten million floats are 80 MB; the
 #: number of points of the whole sweep is bounded when it runs (``interlock.sweep.run.MAX_POINTS``).
 MAX_STEPS = 10_000_000
+#: Sampled points are drawn this many at a time (:meth:`SweepSpec.iter_points`): 8 MB per parameter, and up to
+#: this many samples (the default limit of a run, ``MAX_POINTS``) the very points interlock 0.1 drew.
+SAMPLE_BLOCK = 1_000_000
 
 
 class SweepError(InterlockError):
     """Bad sweep input: a spec, a parameter or records that cannot be used."""
+
+
+class Steps(Sequence):
+    """``steps`` values from ``low`` to ``high``, ends included, each rounded to 12 significant digits (0.3,
+    not 0.29999999999999993): the values of ``numpy.linspace(low, high, steps)``, made when asked for, so a
+    range of ten million steps costs nothing to read, check, copy to a worker or run through.
+
+    >>> Steps(0.0, 1.0, 11)[3], len(Steps(0.0, 1.0, 10**7)), Steps(0.0, 1.0, 3)[:]
+    (0.3, 10000000, (0.0, 0.5, 1.0))
+    """
+
+    def __init__(self, low: float, high: float, steps: int):
+        self.low, self.high, self.steps = float(low), float(high), int(steps)
+        self._step = (self.high - self.low) / (self.steps - 1) if self.steps > 1 else 0.0
+
+    def __len__(self) -> int:
+        return self.steps
+
+    def __getitem__(self, index):
+        if isinstance(index, slice):
+            return tuple(self[i] for i in range(*index.indices(self.steps)))
+        i = range(self.steps)[index]  # negative indices; IndexError past the end
+        value = self.high if i == self.steps - 1 else i * self._step + self.low  # as numpy.linspace computes it
+        return float(f"{value:.12g}")
+
+    def __eq__(self, other) -> bool:
+        if isinstance(other, Steps):
+            return (self.low, self.high, self.steps) == (other.low, other.high, other.steps)
+        return isinstance(other, Sequence) and len(other) == len(self) and tuple(other) == tuple(self)
+
+    def __hash__(self) -> int:
+        return hash((self.low, self.high, self.steps))
+
+    def __repr__(self) -> str:
+        return f"Steps({self.low!r}, {self.high!r}, {self.steps!r})"
 
 
 @dataclass(frozen=True)
@@ -91,7 +129,7 @@ class Parameter:
     """One varying number: ``values`` on a grid, or ``low .. high`` (or ``values``) when sampled."""
 
     name: str
-    values: tuple[float, ...]
+    values: Sequence[float]  # a tuple, or the Steps of a range
     low: float | None = None
     high: float | None = None
 
@@ -144,14 +182,54 @@ class SweepSpec:
         return hashlib.sha256(json.dumps(meaning, sort_keys=True).encode()).hexdigest()[:16]
 
     def points(self) -> list[dict]:
-        """Every point of the sweep, in order: ``{name: value}`` per point (deterministic for a seed)."""
+        """Every point of the sweep, in order: ``{name: value}`` per point (deterministic for a seed).
+
+        A list of :attr:`size` dicts; :meth:`iter_points` makes the same points one at a time.
+        """
+        return list(self.iter_points())
+
+    def iter_points(self):
+        """The points of :meth:`points`, made as they are needed: memory does not grow with the sweep.
+
+        A grid runs through the parameters' values (last fastest).  Samples
+        are drawn in blocks of :data:`SAMPLE_BLOCK` points: up to one block,
+        column after column from one generator seeded with ``seed`` (as
+        interlock 0.1 drew them); beyond, block ``b`` from a generator
+        seeded with ``[seed, b]``, so no column of the whole sweep is ever
+        held.
+
+        >>> spec = load_spec({"group": "p1", "parameters": {"s": {"range": [0, 1], "steps": 10**7},
+        ...                   "t": {"range": [0, 1], "steps": 10**7}}})
+        >>> points = spec.iter_points()
+        >>> spec.size, next(points), next(points)["t"]
+        (100000000000000, {'s': 0.0, 't': 0.0}, 1.0000001e-07)
+        """
         names = [p.name for p in self.parameters]
-        if self.samples:
-            rng = np.random.default_rng(self.seed)
-            columns = [p.sample(rng, self.samples) for p in self.parameters]
-            return [{n: float(c[i]) for n, c in zip(names, columns)} for i in range(self.samples)]
-        grid = itertools.product(*(p.values for p in self.parameters))
-        return [dict(zip(names, map(float, combo))) for combo in grid]
+        if not self.samples:  # an odometer over the values' indices (itertools.product would copy every range)
+            values = [p.values for p in self.parameters]
+            sizes = [len(v) for v in values]
+            if 0 in sizes:
+                return
+            digits = [0] * len(values)
+            current = [float(v[0]) for v in values]
+            for _ in range(self.size):
+                yield dict(zip(names, current))
+                k = len(digits) - 1
+                while k >= 0:
+                    digits[k] += 1
+                    if digits[k] < sizes[k]:
+                        current[k] = float(values[k][digits[k]])
+                        break
+                    digits[k], current[k] = 0, float(values[k][0])
+                    k -= 1
+            return
+        single = self.samples <= SAMPLE_BLOCK
+        for block, start in enumerate(range(0, self.samples, SAMPLE_BLOCK)):
+            count = min(SAMPLE_BLOCK, self.samples - start)
+            rng = np.random.default_rng(self.seed if single else [self.seed, block])
+            columns = [p.sample(rng, count) for p in self.parameters]
+            for i in range(count):
+                yield {n: float(c[i]) for n, c in zip(names, columns)}
 
     def theory(self, x: str, y: str) -> list[dict]:
         """Overlay lines for a map over parameters ``x`` and ``y``: where a swept ``offset`` is 0 the
@@ -306,8 +384,7 @@ def _parameter(name: str, value) -> Parameter:
         if steps == 1 or steps > MAX_STEPS:
             raise SweepError(f"parameter {name!r}: steps must be 0 (sampled only) or 2..{MAX_STEPS:,}, "
                              f"got {steps:,}")
-        grid = tuple(float(f"{v:.12g}") for v in np.linspace(low, high, steps))  # 0.3, not 0.29999999999999993
-        return Parameter(name, grid, low, high)
+        return Parameter(name, Steps(low, high, steps), low, high)
     raise SweepError(f"parameter {name!r} must be {{range = [low, high], steps = n}} or {{values = [...]}}, "
                      f"got {value!r}")
 

@@ -2,14 +2,19 @@
 
 import json
 import os
+import pickle
 import re
 import signal
 import subprocess
 import sys
 import time
+import tracemalloc
 from concurrent.futures import ThreadPoolExecutor
 
+import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from interlock import InterlockError
 from interlock.cli import main
@@ -53,6 +58,100 @@ def test_samples_are_reproducible_from_the_seed_and_stay_in_range():
     other = load_spec({**P4, "samples": 20, "seed": 4}).points()
     assert spec.points() == again != other
     assert all(0.25 <= p["t"] <= 0.75 and -1.2 <= p["s"] <= 1.2 for p in spec.points())
+
+
+def _points_of_interlock_0_1(spec):
+    """The points as interlock 0.1 made them, all at once: what lazily made points must equal (for resuming)."""
+    import itertools
+
+    names = [p.name for p in spec.parameters]
+    if spec.samples:
+        rng = np.random.default_rng(spec.seed)
+        columns = [p.sample(rng, spec.samples) for p in spec.parameters]
+        return [{n: float(c[i]) for n, c in zip(names, columns)} for i in range(spec.samples)]
+    values = [tuple(float(f"{v:.12g}") for v in np.linspace(p.low, p.high, len(p.values))) if p.low is not None
+              else p.values for p in spec.parameters]
+    return [dict(zip(names, map(float, combo))) for combo in itertools.product(*values)]
+
+
+@settings(max_examples=40)
+@given(st.lists(st.one_of(st.tuples(st.floats(-5, 5), st.floats(0.001, 10), st.integers(2, 40)),
+                          st.lists(st.floats(-5, 5), min_size=1, max_size=5)), min_size=1, max_size=3),
+       st.integers(0, 50), st.integers(0, 2**31))
+def test_points_made_lazily_are_the_points_of_interlock_0_1(parameters, samples, seed):
+    table = {}
+    for k, parameter in enumerate(parameters):
+        if isinstance(parameter, tuple):
+            low, width, steps = parameter
+            table[f"p{k}"] = {"range": [low, low + width], "steps": steps}
+        else:
+            table[f"p{k}"] = {"values": parameter}
+    spec = load_spec({"group": "p1", "verdicts": ["criterion_4_3"], "parameters": table, "samples": samples,
+                      "seed": seed, "points": [{"edge": 0, "along": 0.5, "offset": 0.1}]})
+    assert spec.points() == list(spec.iter_points()) == _points_of_interlock_0_1(spec)
+    assert len(spec.points()) == spec.size
+
+
+class _Enough(Exception):
+    pass
+
+
+def _stop_after(chunks):
+    seen = []
+
+    def progress(count):
+        seen.append(count)
+        if len(seen) >= chunks:
+            raise _Enough
+
+    return progress
+
+
+def _grid(steps):
+    return load_spec({"group": "p1", "verdicts": ["criterion_4_3"], "chunk": 2,
+                      "parameters": {"s": {"range": [0.1, 0.2], "steps": steps}, "t": {"range": [0.3, 0.7], "steps": steps}},
+                      "points": [{"edge": 0, "along": "t", "offset": "s"}]})
+
+
+def test_a_large_grid_starts_at_once_in_bounded_memory():
+    # issue 40: sweep --max-points 1e20 on a 1e14-point grid made every point first (14 GB after 57 s); now the
+    # points are made as chunks are handed out, and a run that is stopped after 3 chunks has used a few MB
+    tracemalloc.start()
+    try:
+        spec = _grid(1000)
+        with ThreadPoolExecutor(1) as pool, pytest.raises(_Enough):
+            run(spec, executor=pool, max_points=10**20, progress=_stop_after(3))
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 30e6, f"{peak / 1e6:.0f} MB for the first chunks of a {spec.size:,}-point grid"
+
+
+def test_a_grid_of_1e14_points_costs_nothing_to_read_or_send():
+    # the ranges' values are made when asked for: a 1e7-step range was a tuple of 1e7 floats, read in seconds
+    # and pickled with the spec to every chunk's worker
+    tracemalloc.start()
+    try:
+        spec = _grid(10_000_000)
+        points = spec.iter_points()
+        first = [next(points) for _ in range(3)]
+        sent = len(pickle.dumps(spec))
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert spec.size == 10**14 and first[0] == {"s": 0.1, "t": 0.3} and first[2]["t"] == pytest.approx(0.3 + 0.8e-7)
+    assert sent < 10_000 and peak < 1e6
+    assert spec.parameters[0].values[-1] == 0.2 and len(spec.parameters[0].values) == 10**7
+
+
+def test_records_need_not_be_kept(tmp_path):
+    output = tmp_path / "p1.jsonl"
+    with ThreadPoolExecutor(2) as pool:
+        assert run(P1, output, executor=pool, keep=False) == []
+    kept = _threads(P1)
+    assert _without_time(read_records(output)) == _without_time(kept) and len(kept) == 6
+    with pytest.raises(SweepError, match="keep must be True or False"):
+        _threads(P1, keep="no")
 
 
 def test_deformation_places_the_point_along_and_off_its_edge():
