@@ -20,9 +20,11 @@ and tolerance"):
   ``rho <= 1``: some motion keeps every contact within the tolerance, and the
   verdict is "not interlocked within tolerance".
 
-:func:`margin_lower_bound` proves a lower bound on ``rho`` from a positive
-self-stress; :func:`tolerant_motion` finds a motion within the tolerance, an
-upper bound.
+:func:`~interlock.verify.load_paths.load_path_bound` proves a lower bound on
+``rho`` from load paths built block by block (the bound :func:`assess` uses);
+:func:`margin_lower_bound` proves a weaker one from one positive self-stress;
+:func:`tolerant_motion` and :func:`coordinate_motion` find motions within the
+tolerance, upper bounds.
 """
 
 from __future__ import annotations
@@ -35,10 +37,12 @@ import scipy.optimize
 import scipy.sparse as sp
 import scipy.sparse.linalg
 
+from interlock.errors import InterlockError
 from interlock.files import json_float
+from interlock.verify.load_paths import LOAD_PATH_PASSES, load_path_bound
 
-__all__ = ["Margin", "assess", "rounding_tolerance", "input_precision", "row_tolerances", "margin_lower_bound",
-           "tolerant_motion",
+__all__ = ["Margin", "MarginError", "assess", "rounding_tolerance", "input_precision", "row_tolerances",
+           "margin_lower_bound", "tolerant_motion", "coordinate_motion",
            "GRID_BITS", "DECIMAL_MIN_RTOL", "DECIMAL_MAX_RTOL", "DECIMAL_FULL_SHARE", "PRECISION_FACTOR",
            "MARGIN_CHUNK", "EXACT_RTOL", "TOLERANT_SHARE", "BEND_FACTOR"]
 
@@ -66,16 +70,23 @@ TOLERANT_SHARE = 0.99
 EXACT_RTOL = 1e-12
 
 
+class MarginError(InterlockError):
+    """A tolerance, scale, stress or row tolerance given to the margin that is not a finite number of the right sign."""
+
+
 @dataclass(frozen=True)
 class Margin:
     """Bounds on the margin ``rho`` of :mod:`interlock.verify.margin` (in tolerances) and what they rest on.
 
-    ``lower`` is proved (from a positive stress and the smallest singular
-    value); ``upper`` is attained by ``motion`` (a column vector of ``A``), or
-    ``inf`` when no motion was tried.  ``tolerance`` is the length tolerance
-    (model units) and ``source`` where it came from ("float32 input",
-    "decimals input", "float64 input", "grid input", "faces bent by up to ..."
-    or "given").
+    ``lower`` is proved (by load paths, :mod:`interlock.verify.load_paths`);
+    ``upper`` is attained by ``motion`` (a column vector of ``A``), or
+    ``inf`` when no motion was tried or found; ``upper_status`` then says
+    why ("not needed", "no motion within the tolerance found", or "solver
+    failed: ...").  ``tolerance`` is the length tolerance (model units; the
+    largest one when each contact has its own, ``per_contact``) and
+    ``source`` where it came from ("float32 input", "decimals input",
+    "float64 input", "grid input", "faces bent by up to ...", "given" or the
+    caller's words for per-contact tolerances).
     """
 
     lower: float
@@ -83,15 +94,21 @@ class Margin:
     tolerance: float
     source: str
     motion: np.ndarray | None = None
+    upper_status: str = "not needed"
+    per_contact: bool = False
 
     def __str__(self) -> str:
-        upper = "" if math.isinf(self.upper) else f", at most {self.upper:.3g}"
-        return (f"margin at least {self.lower:.3g}{upper} times the tolerance {self.tolerance:.3g} "
+        if math.isfinite(self.upper):
+            upper = f", at most {self.upper:.3g}"
+        else:
+            upper = "" if self.upper_status == "not needed" else f" (upper bound: {self.upper_status})"
+        each = "up to " if self.per_contact else ""
+        return (f"margin at least {self.lower:.3g}{upper} times the tolerance {each}{self.tolerance:.3g} "
                 f"({self.source})")
 
     def to_dict(self) -> dict:
         return {"lower": json_float(self.lower), "upper": json_float(self.upper), "tolerance": self.tolerance,
-                "source": self.source}
+                "source": self.source, "upper_status": self.upper_status, "per_contact": self.per_contact}
 
 
 def input_precision(vertices) -> tuple[float, str]:
@@ -147,7 +164,7 @@ def row_tolerances(matrix, contacts, tolerance) -> np.ndarray:
     L = matrix.length_scale
     areas = np.array([c.area for c in contacts], dtype=float)
     sizes = np.where(areas > 0, np.sqrt(np.maximum(areas, 0.0)), L)
-    t = np.asarray(tolerance, dtype=float)
+    t = _tolerance_checked(tolerance, len(contacts))
     t = t[matrix.row_contact] if t.ndim else t
     return (t / L) * (1.0 + 2.0 * L / sizes[matrix.row_contact])
 
@@ -162,9 +179,18 @@ def margin_lower_bound(A: sp.csr_matrix, eps: np.ndarray, stress, chunk: int = M
     nonnegative: ``u = u0 + tau w`` with ``tau = max(0, max_r -u0_r / w_r)``.
     Then every ``x`` in ``P`` has ``||x||_inf <= B = max_j (eps . u)``, and
     ``rho >= 1 / B``.  Needs full column rank; the inverse is one sparse LU,
-    applied to ``chunk`` coordinates at a time.
+    applied to ``chunk`` coordinates at a time (cost: ``n`` solves and a dense
+    ``m x chunk`` block per chunk, ``O(n m)``).  The float stress's residual
+    ``A^T w`` is taken as zero.  Superseded in :func:`assess` by
+    :func:`~interlock.verify.load_paths.load_path_bound`, which is 20 to 100
+    times tighter; kept as a reference.
     """
+    eps = _row_tolerances_checked(eps, A.shape[0])
     w = np.asarray(stress, dtype=float)
+    if w.shape != (A.shape[0],) or not np.all(np.isfinite(w)) or np.any(w <= 0):
+        raise MarginError("stress must be a finite positive self-stress, one weight per row of A")
+    if isinstance(chunk, bool) or not isinstance(chunk, (int, np.integer)) or chunk < 1:
+        raise MarginError(f"chunk must be a positive integer, got {chunk!r}")
     n = A.shape[1]
     gram = (A.T @ A).tocsc()
     lu = scipy.sparse.linalg.splu(gram)
@@ -184,22 +210,95 @@ def margin_lower_bound(A: sp.csr_matrix, eps: np.ndarray, stress, chunk: int = M
 def tolerant_motion(A: sp.csr_matrix, eps: np.ndarray, tol: float = 1e-9):
     """The motion LP with every row relaxed by its tolerance: ``max 1^T A x``, ``A x >= -eps``, ``|x| <= 1``.
 
-    Returns ``(x, rho)`` where ``rho = max_r(-(A x)_r / eps_r) / ||x||_inf``
-    (at most 1 when ``x`` reaches the box: a unit motion that keeps every
-    contact within its tolerance), or ``(None, inf)`` when the LP fails.
+    Returns ``(x, rho, status)`` where ``rho = max_r(-(A x)_r / eps_r) /
+    ||x||_inf`` (at most 1 when ``x`` reaches the box: a unit motion that
+    keeps every contact within its tolerance) and ``status`` is "found";
+    or ``(None, inf, status)`` with ``status`` "solver failed: <HiGHS'
+    message>" or "no motion within the tolerance found" (the LP's optimum is
+    ``x = 0``).
+
+    Examples
+    --------
+    >>> A = sp.csr_matrix(np.array([[1.0, 0.0], [0.0, 1.0], [-1.0, -1.0]]))
+    >>> x, rho, status = tolerant_motion(A, np.full(3, 1e-3))
+    >>> status, rho > 1
+    ('found', True)
     """
+    A = sp.csr_matrix(A, dtype=float)
+    eps = _row_tolerances_checked(eps, A.shape[0])
+    tol = _positive("tol", tol)
     objective = -np.asarray(A.sum(axis=0)).ravel()
     # rows relaxed by a little less than eps, so that HiGHS' feasibility tolerance cannot push a row past it
     result = scipy.optimize.linprog(objective, A_ub=-A, b_ub=TOLERANT_SHARE * eps, bounds=(-1.0, 1.0), method="highs",
                                     options={"primal_feasibility_tolerance": tol})
-    if result.status != 0:
-        return None, math.inf
-    x = result.x
+    if result.status != 0 or result.x is None:
+        return None, math.inf, f"solver failed: {result.message}"
+    return _judged(A, eps, result.x)
+
+
+def coordinate_motion(A: sp.csr_matrix, eps: np.ndarray, column: int, sign: float = 1.0, tol: float = 1e-9):
+    """The exact LP of one coordinate: ``max sign * x_j``, ``A x >= -eps``, ``|x| <= 1``; as :func:`tolerant_motion`.
+
+    The margin is ``rho = 1 / max_j max_{+-} (+-x_j over P)``: the coordinate
+    whose load-path bound is largest (:mod:`interlock.verify.load_paths`) is
+    the natural one to try for a motion that reaches the unit box.
+    """
+    A = sp.csr_matrix(A, dtype=float)
+    eps = _row_tolerances_checked(eps, A.shape[0])
+    n = A.shape[1]
+    if isinstance(column, bool) or not isinstance(column, (int, np.integer)) or not 0 <= column < n:
+        raise MarginError(f"column must be a column index of A (0 .. {n - 1}), got {column!r}")
+    if sign not in (1, -1, 1.0, -1.0):
+        raise MarginError(f"sign must be 1 or -1, got {sign!r}")
+    objective = np.zeros(n)
+    objective[column] = -float(sign)
+    result = scipy.optimize.linprog(objective, A_ub=-A, b_ub=TOLERANT_SHARE * eps, bounds=(-1.0, 1.0), method="highs",
+                                    options={"primal_feasibility_tolerance": _positive("tol", tol)})
+    if result.status != 0 or result.x is None:
+        return None, math.inf, f"solver failed: {result.message}"
+    return _judged(A, eps, result.x)
+
+
+def _judged(A, eps, x):
+    """``(x, rho, "found")`` for a solver's motion, or no motion when it is zero."""
     size = float(np.abs(x).max(initial=0.0))
     if size == 0:
-        return None, math.inf
+        return None, math.inf, "no motion within the tolerance found"
     y = A @ x
-    return x, float(max(0.0, float((-y / eps).max(initial=0.0))) / size)
+    return x, float(max(0.0, float((-y / eps).max(initial=0.0))) / size), "found"
+
+
+def _positive(name: str, value) -> float:
+    """``value`` as a finite float > 0, else :class:`MarginError` naming ``name``."""
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)) \
+            or not math.isfinite(value) or value <= 0:
+        raise MarginError(f"{name} must be a finite number > 0, got {value!r}")
+    return float(value)
+
+
+def _row_tolerances_checked(eps, rows: int) -> np.ndarray:
+    """``eps`` as ``rows`` finite positive floats, else :class:`MarginError`."""
+    eps = np.asarray(eps, dtype=float)
+    if eps.shape != (rows,):
+        raise MarginError(f"eps must hold one tolerance per row of A ({rows}), got shape {eps.shape}")
+    if not np.all(np.isfinite(eps)) or np.any(eps <= 0):
+        raise MarginError("eps must be finite row tolerances > 0 (got NaN, infinite, zero or negative ones)")
+    return eps
+
+
+def _tolerance_checked(tolerance, contacts: int):
+    """One length, or one per contact: finite and >= 0, else :class:`MarginError` naming ``tolerance``."""
+    if isinstance(tolerance, bool):
+        raise MarginError(f"tolerance must be a finite length >= 0 or one per contact, got {tolerance!r}")
+    try:
+        t = np.asarray(tolerance, dtype=float)
+    except (TypeError, ValueError):
+        raise MarginError(f"tolerance must be a finite length >= 0 or one per contact, got {tolerance!r}") from None
+    if t.ndim > 1 or (t.ndim == 1 and len(t) != contacts):
+        raise MarginError(f"tolerance must be one length or one per contact ({contacts}), got shape {t.shape}")
+    if not np.all(np.isfinite(t)) or np.any(t < 0):
+        raise MarginError(f"tolerance must be finite lengths >= 0, got {tolerance!r}")
+    return t
 
 
 def rounding_tolerance(assembly) -> tuple[float, str]:
@@ -214,27 +313,109 @@ def rounding_tolerance(assembly) -> tuple[float, str]:
     return PRECISION_FACTOR * delta, f"{source} input"
 
 
-def assess(matrix, contacts, scale: float, stress, tolerance: float, source: str) -> Margin:
+def assess(matrix, contacts, scale: float, stress, tolerance, source: str, *, per_contact: bool | None = None,
+           passes: int = LOAD_PATH_PASSES) -> Margin:
     """The margin of an "interlocked" float verdict against the tolerance ``tolerance`` of its input.
 
-    ``tolerance`` (a length) and its ``source`` are the caller's: the given
-    one, or :func:`rounding_tolerance`; then :data:`BEND_FACTOR` times the
-    largest :attr:`~interlock.blocks.contact.Contact.deviation` of a contact
-    from its plane is used where that is larger (noisy or re-meshed input).
-    Below :data:`EXACT_RTOL` of the model size ``scale`` nothing is computed
-    (``lower = inf``).  Otherwise the lower bound of
-    :func:`margin_lower_bound` and, when it does not exceed 1, the motion of
-    :func:`tolerant_motion`.
+    Parameters
+    ----------
+    matrix : InterlockingMatrix
+    contacts : sequence of Contact
+        The contacts of ``matrix`` (``matrix.row_contact`` indexes them).
+    scale : float
+        The model size (``Assembly.scale``), > 0.
+    stress : array or None
+        The float verdict's positive stress; None: nothing to assess (the
+        margin is returned as infinite, as before).
+    tolerance : float or array
+        One length (model units), or one per contact.
+    source : str
+        Where the tolerance came from ("given", "float32 input", ...).
+    per_contact : bool, optional
+        True: ``tolerance`` already holds each contact's own tolerance (its
+        bend and gap included) and is used as it is.  False: one length;
+        where the caller did not give it (``source != "given"``),
+        :data:`BEND_FACTOR` times the largest
+        :attr:`~interlock.blocks.contact.Contact.deviation` of a contact from
+        its plane replaces it when larger (noisy or re-meshed input).
+        Default: True when ``tolerance`` is an array.
+    passes : int
+        Passes of the load-path bound at most.
+
+    Returns
+    -------
+    Margin
+        Below :data:`EXACT_RTOL` of ``scale`` nothing is computed
+        (``lower = inf``).  Otherwise the load-path lower bound
+        (:func:`~interlock.verify.load_paths.load_path_bound`, stopped once
+        it exceeds 1); when it does not, a motion within the tolerance: the
+        exact LP of the coordinate whose bound is largest
+        (:func:`coordinate_motion`), then :func:`tolerant_motion`.  A solver
+        failure is kept in ``upper_status``, never dropped.
+
+    Raises
+    ------
+    MarginError
+        A NaN, infinite or negative ``tolerance`` or ``scale``, a tolerance
+        array of the wrong length, a stress that is not finite.
+
+    Examples
+    --------
+    A cube between two fixed ones slides along their faces: with only its
+    two contacts it is not interlocked, but four walls around it hold it.
+
+    >>> import trimesh
+    >>> from interlock.blocks import Assembly
+    >>> from interlock.verify import contacts as find, interlocking_matrix
+    >>> cubes = [trimesh.creation.box(bounds=[[x, y, 0], [x + 1, y + 1, 1]])
+    ...          for x, y in [(1, 1), (0, 1), (2, 1), (1, 0), (1, 2)]]
+    >>> cage = Assembly.from_meshes(cubes + [trimesh.creation.box(bounds=[[1, 1, z], [2, 2, z + 1]])
+    ...                                       for z in (-1, 1)])
+    >>> found = find(cage)
+    >>> A = interlocking_matrix(cage, frame=[1, 2, 3, 4, 5, 6], contacts=found)
+    >>> m = assess(A, found, cage.scale, np.ones(A.shape[0]), 1e-3, "given")
+    >>> m.lower > 1, m.upper_status
+    (True, 'not needed')
     """
-    if source != "given":
+    scale = _positive("scale", scale)
+    t = _tolerance_checked(tolerance, len(contacts))
+    if per_contact is None:
+        per_contact = t.ndim == 1
+    elif not isinstance(per_contact, (bool, np.bool_)):
+        raise MarginError(f"per_contact must be True, False or None, got {per_contact!r}")
+    if per_contact and t.ndim == 0:
+        t = np.full(len(contacts), float(t))
+    if not per_contact and t.ndim == 1:
+        raise MarginError("one tolerance per contact was given with per_contact=False; pass one length instead")
+    if stress is not None:
+        stress = np.asarray(stress, dtype=float)
+        if not np.all(np.isfinite(stress)):
+            raise MarginError("stress must be finite (a float self-stress of A)")
+    if not per_contact and source != "given":
         bent = max((c.deviation for c in contacts), default=0.0)
-        if BEND_FACTOR * bent > tolerance:  # the faces are measurably less exact than their rounding
-            tolerance, source = BEND_FACTOR * bent, f"faces bent by up to {bent:.2g}"
-    if tolerance <= EXACT_RTOL * scale or stress is None:
-        return Margin(math.inf, math.inf, float(tolerance), source)
-    eps = row_tolerances(matrix, contacts, tolerance)
-    lower = margin_lower_bound(matrix.matrix, eps, stress)
+        if BEND_FACTOR * bent > float(t):  # the faces are measurably less exact than their rounding
+            t, source = np.asarray(BEND_FACTOR * bent), f"faces bent by up to {bent:.2g}"
+    largest = float(t.max(initial=0.0))
+    if largest <= EXACT_RTOL * scale or stress is None:
+        return Margin(math.inf, math.inf, largest, source, per_contact=bool(per_contact))
+    if np.any(t <= 0):  # an exact contact among tolerant ones: the rounding of the float64 numbers stands for it
+        t = np.maximum(t, EXACT_RTOL * scale)
+    A = matrix.matrix
+    eps = row_tolerances(matrix, contacts, t)
+    found = load_path_bound(A, eps, matrix.block_size, passes=passes, target=1.0)
+    lower = found.margin
     if lower > 1.0:
-        return Margin(lower, math.inf, float(tolerance), source)
-    motion, upper = tolerant_motion(matrix.matrix, eps)
-    return Margin(lower, upper, float(tolerance), source, motion)
+        return Margin(lower, math.inf, largest, source, per_contact=bool(per_contact))
+    motion, upper, status = None, math.inf, "no motion within the tolerance found"
+    if np.isfinite(found.coordinates).any():
+        column, side = np.unravel_index(int(np.nanargmax(np.where(np.isfinite(found.coordinates),
+                                                                   found.coordinates, -1.0))),
+                                        found.coordinates.shape)
+        motion, upper, status = coordinate_motion(A, eps, int(column), 1.0 if side == 0 else -1.0)
+    if motion is None or upper > 1.0:
+        tried, tried_upper, tried_status = tolerant_motion(A, eps)
+        if tried is not None and (motion is None or tried_upper < upper):
+            motion, upper, status = tried, tried_upper, tried_status
+        elif motion is None:
+            status = tried_status
+    return Margin(lower, upper, largest, source, motion, upper_status=status, per_contact=bool(per_contact))

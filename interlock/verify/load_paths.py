@@ -1,0 +1,459 @@
+"""A proved lower bound on the margin from load paths: one small LP per block and load, batched.
+
+The margin of :mod:`interlock.verify.margin` is ``rho = 1 / R`` with
+``R = max over x in P of ||x||_inf``, ``P = {x : A x >= -eps}``.  Each
+coordinate bound is an LP whose dual is a *load path*: ``+-x_j <= eps . u``
+for every ``u >= 0`` with ``A^T u = -+e_j`` (forces at the contact vertices
+that carry a unit load on coordinate ``j`` to the frame).  Solving the ``2n``
+LPs is exact but far too slow; one positive self-stress added to a
+least-squares ``u`` (:func:`~interlock.verify.margin.margin_lower_bound`) is
+cheap but pays the stress of the whole assembly for every coordinate, and
+falls 100 to 300 times short.  :func:`load_path_bound` builds the load paths
+block by block instead.
+
+The argument.  For a free block ``g`` and a load ``l`` on its columns let
+``C(l) = min {eps . u : u >= 0, A^T u = -l}`` (``+inf`` if there is no such
+``u``); then ``l . x <= C(l)`` on ``P`` (weak duality), and ``C`` is convex
+and positively homogeneous.  Write ``a_r^g`` for the part of row ``r`` on the
+columns of block ``g`` and ``o(r)`` for the other block of the row (none for a
+row against the frame).  Take forces ``f_r >= 0`` on the rows of ``g`` and
+slacks ``s+-_k >= 0`` with ``sum_r f_r a_r^g - s+ + s- = -l``.  The forces load
+each neighbour ``o`` with ``f_r a_r^o``; a certificate of cost
+``C(a_r^o)`` per unit carries that on, and ``s+-_k`` is carried by the
+certificates of ``+-e_k`` on ``g`` itself.  Adding them gives a ``u >= 0`` with
+``A^T u = -l``, so
+
+    C(l) <= sum_r f_r (eps_r + gamma_r) + sum_k (s+_k V_g(+k) + s-_k V_g(-k)),
+
+with ``gamma_r`` any proved bound on ``C(a_r^o)`` (0 against the frame) and
+``V_g(+-k)`` any proved bound on ``C(+-e_k)``.  Every feasible ``(f, s)`` gives
+a proved bound, optimal or not: the minimum is a 6-row LP per block and load.
+Starting from ``+inf`` everywhere (columns of infinite cost are kept at zero,
+a first phase), the bounds of the loads ``a_r^g`` (the ``gamma``) and of the
+unit loads ``+-e_k`` (the ``V``) are improved block by block, the blocks in
+layers by their distance from the frame, outside in and back
+(:data:`LOAD_PATH_PASSES` passes at most).  Each value is computed from values
+proved before it, so by induction all are proved, and
+
+    rho >= 1 / max_{g, k, +-} V_g(+-k).
+
+The fixed point is the exact ``R`` up to loads that cancel on one block but
+are carried separately; on RhomBlock hexagons rounded to float32 it is within
+25 % of the exact LPs (``tests/verify/test_margin.py`` compares with them).
+Floating point: the 6 x 6 solves are exact up to rounding, which
+:data:`LOAD_PATH_SAFETY` (a relative inflation of every value) covers;
+negative rounding residues of the forces are dropped.
+
+The LPs are solved by a primal simplex vectorised over all loads of a layer
+(numpy, 6 x 6 bases): the slacks give a feasible start and every pivot keeps
+feasibility, so stopping after :data:`LOAD_PATH_PIVOTS` pivots still gives
+proved values.  Cost per pass: about ``(rows + 12 blocks)`` small LPs.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg
+
+from interlock.errors import InterlockError
+
+__all__ = ["LoadPathBound", "load_path_bound", "LOAD_PATH_PASSES", "LOAD_PATH_PIVOTS", "LOAD_PATH_SAFETY",
+           "LOAD_PATH_STALL", "LOAD_PATH_SLACK",
+           "LOAD_PATH_IMPROVEMENTS", "LOAD_PATH_FIRST_TRY", "LoadPathError"]
+
+#: Passes over the layers at most (outside in, inside out, ...).  RhomBlock hexagons rounded to float32
+#: reach their best bound within 4 to 6 passes (measured up to n = 12).
+LOAD_PATH_PASSES = 12
+#: Simplex pivots per local LP at most; a 6-row LP with about 40 columns needs 6 to 20.  Stopping early keeps
+#: a feasible, hence proved, value.
+LOAD_PATH_PIVOTS = 120
+#: Every computed value is multiplied by ``1 + LOAD_PATH_SAFETY``: far above the rounding of 6 x 6 solves
+#: with condition numbers up to ~1e6 (``1e6 * 2^-52`` ~ 2e-10 per step, summed over at most thousands of steps).
+LOAD_PATH_SAFETY = 1e-6
+#: The local LPs' loads are perturbed by this share (random, fixed seed) while pivoting: no degenerate pivots.
+LOAD_PATH_PERTURBATION = 1e-7
+#: The values that have settled are inflated by this share and then checked as a strict supersolution (the proof).
+LOAD_PATH_SLACK = 0.05
+#: Policy-iteration steps at most (each: one pass and one sparse solve).
+LOAD_PATH_IMPROVEMENTS = 3
+#: The first pass after which the local solutions are evaluated (tried as certificates); earlier ones rarely are.
+LOAD_PATH_FIRST_TRY = 3
+#: Passes stop once a pass improves the bound by less than this share (the fixed point is near).
+LOAD_PATH_STALL = 0.01
+
+
+class LoadPathError(InterlockError):
+    """Bad input to :func:`load_path_bound`: a matrix, tolerances or a block size that do not fit."""
+
+
+@dataclass(frozen=True)
+class LoadPathBound:
+    """What :func:`load_path_bound` proved.
+
+    ``bound`` is ``R``: every ``x`` with ``A x >= -eps`` has
+    ``||x||_inf <= bound`` (``inf`` when some coordinate has no load path);
+    ``coordinates`` is that bound per column and sign, shape ``(n, 2)``
+    (``+x_j``, ``-x_j``); ``passes`` how many passes ran and ``pivots`` the
+    simplex pivots in all.
+    """
+
+    bound: float
+    coordinates: np.ndarray
+    passes: int
+    pivots: int
+
+    @property
+    def margin(self) -> float:
+        """The proved lower bound ``1 / bound`` on the margin ``rho``."""
+        return 0.0 if math.isinf(self.bound) else (math.inf if self.bound <= 0 else 1.0 / self.bound)
+
+
+def load_path_bound(A, eps, block_size: int = 6, *, start: float | None = None, passes: int = LOAD_PATH_PASSES,
+                    target: float | None = None, pivots: int = LOAD_PATH_PIVOTS) -> LoadPathBound:
+    """A proved bound ``R >= max {||x||_inf : A x >= -eps}`` from load paths built block by block.
+
+    Parameters
+    ----------
+    A : scipy.sparse matrix (m, n)
+        The interlocking matrix, ``block_size`` columns per free block.
+    eps : array (m,)
+        Positive row tolerances.
+    start : float, optional
+        The guess every bound starts from (not a proof; the values only have
+        to settle).  Default: the largest ``eps``.
+    passes : int
+        Passes over the layers at most.
+    target : float, optional
+        Stop as soon as the bound is at most this (e.g. 1: the margin exceeds 1).
+    pivots : int
+        Simplex pivots per local LP at most.
+
+    Returns
+    -------
+    LoadPathBound
+        ``R`` and the bound per coordinate; ``rho >= 1 / R`` (the module's
+        docstring has the argument).
+
+    Examples
+    --------
+    Three cubes in a row, the outer ones fixed: the middle one moves only
+    within its tolerances.
+
+    >>> A = sp.csr_matrix(np.array([[1.0], [-1.0]]))
+    >>> result = load_path_bound(A, np.array([1e-3, 2e-3]), block_size=1)
+    >>> round(result.bound, 6), result.coordinates.round(6).tolist()
+    (0.002, [[0.002, 0.001]])
+    """
+    A = sp.csr_matrix(A, dtype=float)
+    eps = np.asarray(eps, dtype=float)
+    m, n = A.shape
+    if block_size not in (1, 3, 6) or n % block_size:
+        raise LoadPathError(f"block_size must be 6, 3 (or 1) and divide the {n} columns, got {block_size!r}")
+    if eps.shape != (m,) or not np.all(np.isfinite(eps)) or np.any(eps <= 0):
+        raise LoadPathError(f"eps must hold {m} finite positive row tolerances")
+    if not np.all(np.isfinite(A.data)):
+        raise LoadPathError("the matrix A has entries that are not finite")
+    if isinstance(passes, bool) or not isinstance(passes, (int, np.integer)) or passes < 1:
+        raise LoadPathError(f"passes must be a positive integer, got {passes!r}")
+    if isinstance(pivots, bool) or not isinstance(pivots, (int, np.integer)) or pivots < 1:
+        raise LoadPathError(f"pivots must be a positive integer, got {pivots!r}")
+    if start is None:
+        start = 0.0
+    if isinstance(start, bool) or not isinstance(start, (int, float, np.floating)) or not 0 <= start < math.inf:
+        raise LoadPathError(f"start must be a finite guess >= 0, got {start!r}")
+    if target is not None and not (isinstance(target, (int, float, np.floating)) and target > 0):
+        raise LoadPathError(f"target must be a positive number or None, got {target!r}")
+    blocks = n // block_size
+    if blocks == 0:
+        return LoadPathBound(0.0, np.zeros((0, 2)), 0, 0)
+    paths = _Paths(A, eps, block_size)
+    paths.gamma[:] = start
+    total, best, done, policy = 0, None, 0, None
+    proper = False
+    while done < passes:  # from below, until the local solutions form certificates (a proper policy)
+        done += 1
+        policy, count = paths.sweep(paths.layers if done % 2 else paths.layers[::-1], pivots)
+        total += count
+        if done >= LOAD_PATH_FIRST_TRY:
+            kept = paths.gamma.copy()
+            proper = paths.evaluate(policy)
+            if proper:
+                break
+            paths.gamma = kept
+    for _ in range(LOAD_PATH_IMPROVEMENTS if proper else 0):  # policy iteration: improve, evaluate again
+        policy, count = paths.policy(pivots)  # the values V rest on the proved gamma
+        total += count
+        bound = float(paths.V.max(initial=0.0))
+        if best is None or bound < best.bound:
+            best = LoadPathBound(bound, paths.V.reshape(blocks * block_size, 2).copy(), done, total)
+        if (target is not None and bound <= target) or not paths.evaluate(policy):
+            break
+    if best is None:
+        return LoadPathBound(math.inf, np.full((blocks * block_size, 2), np.inf), done, total)
+    return LoadPathBound(best.bound, best.coordinates, best.passes, total)
+
+
+class _Paths:
+    """The incidences (row, block) of ``A``, the bounds ``gamma`` per incidence and ``V`` per coordinate."""
+
+    def __init__(self, A: sp.csr_matrix, eps: np.ndarray, size: int):
+        m, n = A.shape
+        self.size, self.eps = size, eps
+        blocks = n // size
+        coo = A.tocoo()
+        keep = coo.data != 0
+        rows, cols, vals = coo.row[keep], coo.col[keep], coo.data[keep]
+        key = rows.astype(np.int64) * blocks + cols // size
+        pairs, where = np.unique(key, return_inverse=True)
+        self.row = (pairs // blocks).astype(np.int64)  # per incidence: its row and its block
+        self.block = (pairs % blocks).astype(np.int64)
+        self.vector = np.zeros((len(pairs), size))  # a_r^g
+        np.add.at(self.vector, (where, cols % size), vals)
+        # the other incidence of the same row (-1: the row is against the frame)
+        self.other = np.full(len(pairs), -1, dtype=np.int64)
+        first = np.r_[True, self.row[1:] != self.row[:-1]]
+        starts = np.flatnonzero(first)
+        counts = np.diff(np.r_[starts, len(pairs)])
+        if np.any(counts > 2):
+            raise LoadPathError("a row of A touches more than two blocks")
+        two = starts[counts == 2]
+        self.other[two], self.other[two + 1] = two + 1, two
+        self.gamma = np.full(len(pairs), np.inf)
+        self.bases = np.full((len(pairs), size), -1, dtype=np.int64)  # each incidence LP's last basis
+        self.V = np.full((blocks, size, 2), np.inf)
+        # each block's incidences, padded
+        order = np.argsort(self.block, kind="stable")
+        per_block = np.bincount(self.block, minlength=blocks)
+        self.width = int(per_block.max(initial=0))
+        self.columns = np.full((blocks, self.width), -1, dtype=np.int64)
+        offsets = np.r_[0, np.cumsum(per_block)[:-1]]
+        slot = np.arange(len(order)) - offsets[self.block[order]]
+        self.columns[self.block[order], slot] = order
+        self.layers = _layers(self, blocks)
+
+    def local(self, layer: np.ndarray, pivots: int, units: bool = True):
+        """The local LPs of the blocks ``layer`` at the current ``gamma``: every incidence load and every ``+-e_k``.
+
+        Returns ``(incidences, values, eps_parts, carried, forces)`` for the
+        incidence loads (``carried``: for each basic column the incidence whose
+        load it passes on, -1 for none), ``(blocks, k, sign, values)`` for the
+        unit loads, and the pivots done.
+        """
+        size, width = self.size, self.width
+        cols = self.columns[layer]  # (b, width)
+        real = cols >= 0
+        safe = np.maximum(cols, 0)
+        vectors = np.where(real[..., None], self.vector[safe], 0.0)  # (b, width, size)
+        other = np.where(real, self.other[safe], -1)
+        carry = np.where(other >= 0, self.gamma[np.maximum(other, 0)], 0.0)
+        own = np.where(real, self.eps[self.row[safe]], 0.0)
+        cost = np.where(real, own + carry, np.inf)
+        eye = np.eye(size)
+        count = len(layer)
+        # columns: the rows' vectors, then slacks -e_k and +e_k for a first phase (infinite cost)
+        M = np.concatenate([vectors.transpose(0, 2, 1), np.broadcast_to(-eye, (count, size, size)),
+                            np.broadcast_to(eye, (count, size, size))], axis=2)  # (b, size, width + 2 size)
+        c = np.concatenate([cost, np.full((count, 2 * size), np.inf)], axis=1)
+        e = np.concatenate([own, np.zeros((count, 2 * size))], axis=1)
+        # the loads: each incidence of the block, then +e_k and -e_k
+        loads = np.concatenate([vectors, np.broadcast_to(eye, (count, size, size)),
+                                np.broadcast_to(-eye, (count, size, size))], axis=1)  # (b, width + 2 size, size)
+        valid = np.concatenate([real, np.full((count, 2 * size), units)], axis=1)
+        owner, which = np.nonzero(valid)
+        slots = which < width
+        warm = np.full((len(owner), size), -1, dtype=np.int64)
+        warm[slots] = self.bases[cols[owner[slots], which[slots]]]
+        values, parts, done, bases, forces = _simplex(M[owner], c[owner], e[owner], -loads[owner, which], pivots,
+                                                      warm)
+        self.bases[cols[owner[slots], which[slots]]] = bases[slots]
+        values = values * (1.0 + LOAD_PATH_SAFETY)
+        used = np.take_along_axis(np.concatenate([other, np.full((count, 2 * size), -1)], axis=1)[owner], bases,
+                                  axis=1)  # the incidence each basic column loads (-1: the frame or a slack)
+        unit = which[~slots] - width
+        return ((cols[owner[slots], which[slots]], values[slots], parts[slots], used[slots], forces[slots]),
+                (layer[owner[~slots]], unit % size, unit // size, values[~slots]), done)
+
+    def sweep(self, layers, pivots: int):
+        """One Gauss-Seidel pass: each layer's local LPs at the latest values, which they replace.
+
+        Returns the local solutions (a policy for :meth:`evaluate`) and the pivots done.
+        """
+        done, found = 0, []
+        for layer in layers:
+            incidence, _, count = self.local(layer, pivots, units=False)
+            self.gamma[incidence[0]] = incidence[1]
+            found.append(incidence)
+            done += count
+        return [np.concatenate(part) for part in zip(*found)], done
+
+    def policy(self, pivots: int):
+        """One Jacobi pass at the current ``gamma``: the bounds ``V`` it implies and each incidence's local solution."""
+        done, found = 0, []
+        for layer in self.layers:
+            incidence, (g, k, sign, unit), count = self.local(layer, pivots)
+            self.V[g, k, sign] = unit
+            found.append(incidence)
+            done += count
+        return [np.concatenate(part) for part in zip(*found)], done
+
+    def evaluate(self, policy) -> bool:
+        """Set ``gamma`` to the proved cost of the certificates that ``policy`` builds; False where it proves nothing.
+
+        With the local solutions fixed, the costs solve ``gamma = c + P gamma``
+        (``c`` the tolerances paid on the block, ``P >= 0`` the loads passed
+        on).  A ``gamma > 0`` with ``c + P gamma <= gamma`` and ``c > 0``
+        gives ``P gamma < gamma``, so the spectral radius of ``P`` is below 1:
+        the recursion converges to a certificate of cost ``(I - P)^-1 c <=
+        gamma``.  The computed solution is inflated by ``LOAD_PATH_SAFETY``
+        and that inequality checked.
+        """
+        incidences, values, parts, used, forces = policy
+        count = len(self.gamma)
+        finite = np.zeros(count, dtype=bool)
+        finite[incidences[np.isfinite(values) & (parts > 0)]] = True
+        while True:  # a solution that passes load to an unproved incidence proves nothing either
+            bad = np.any((used >= 0) & (forces > 0) & ~finite[np.maximum(used, 0)], axis=1) & finite[incidences]
+            if not bad.any():
+                break
+            finite[incidences[bad]] = False
+        keep = finite[incidences]
+        if not keep.any():
+            return False
+        index = np.full(count, -1)
+        index[incidences[keep]] = np.arange(int(keep.sum()))
+        rows = np.repeat(index[incidences[keep]], self.size)
+        links, weights = used[keep].ravel(), forces[keep].ravel()
+        take = (links >= 0) & (weights > 0)
+        P = sp.csr_matrix((weights[take], (rows[take], index[links[take]])), shape=(keep.sum(), keep.sum()))
+        c = parts[keep]
+        try:
+            with warnings.catch_warnings():  # a singular system (a policy that proves nothing) gives NaN: judged below
+                warnings.simplefilter("ignore", scipy.sparse.linalg.MatrixRankWarning)
+                solution = scipy.sparse.linalg.spsolve((sp.identity(P.shape[0], format="csc") - P).tocsc(), c)
+        except RuntimeError:
+            return False
+        if not np.all(np.isfinite(solution)) or np.any(solution <= 0):
+            return False
+        solution = solution * (1.0 + LOAD_PATH_SAFETY)
+        if np.any(c + P @ solution > solution):
+            return False
+        self.gamma[:] = np.inf
+        self.gamma[incidences[keep]] = solution
+        return True
+
+
+def _layers(paths: _Paths, blocks: int) -> list[np.ndarray]:
+    """The free blocks by their distance (in contacts) from the frame: the blocks with a row against it first."""
+    has_other = paths.other >= 0
+    edges = sp.csr_matrix((np.ones(int(has_other.sum())), (paths.block[has_other],
+                                                           paths.block[paths.other[has_other]])),
+                          shape=(blocks, blocks))
+    distance = np.full(blocks, -1)
+    front = np.unique(paths.block[~has_other])
+    level = 0
+    while front.size:
+        distance[front] = level
+        reached = np.unique(edges[front].indices)
+        front = reached[distance[reached] < 0]
+        level += 1
+    layers = [np.flatnonzero(distance == d) for d in range(level)]
+    unreached = np.flatnonzero(distance < 0)
+    return layers + ([unreached] if unreached.size else [])
+
+
+def _simplex(M: np.ndarray, c: np.ndarray, e: np.ndarray, b: np.ndarray, pivots: int, warm=None):
+    """``min c . f`` subject to ``M f = b``, ``f >= 0``, for a stack of small LPs: (values, ``e . f``, pivots done).
+
+    ``M`` has shape ``(N, s, p)`` whose last ``2 s`` columns are ``-I, +I``;
+    columns of infinite cost are allowed (phase one keeps them at zero: the
+    value is ``inf`` where it cannot).  Primal simplex from the slack basis,
+    Dantzig's rule, vectorised over the stack; every iterate is feasible, so
+    the value returned (the cost of the last basis) is that of a feasible
+    point even where the pivots ran out.  ``warm``: a basis per LP to start
+    from where it is still feasible (-1 entries: none).  Returns (values,
+    ``e . f``, pivots done, final bases, the forces on them).
+    """
+    N, s, p = M.shape
+    if N == 0:
+        return np.zeros(0), np.zeros(0), 0, np.zeros((0, s), dtype=np.int64), np.zeros((0, s))
+    infinite = ~np.isfinite(c)
+    c1 = infinite.astype(float)  # phase one: the columns that have no proved cost
+    c2 = np.where(infinite, 0.0, c)
+    # the slack basis: +e_k (column p - s + k) where b_k >= 0, else -e_k (column p - 2 s + k)
+    k = np.arange(s)
+    # the right-hand sides perturbed a little (no ties in the ratio test, so no cycling); the final forces
+    # are solved again with the true ones
+    size = np.abs(b).max(axis=1, keepdims=True)
+    perturbed = b + LOAD_PATH_PERTURBATION * size * np.random.default_rng(0).uniform(0.5, 1.0, b.shape) * \
+        np.where(b >= 0, 1.0, -1.0)
+    basis = np.where(perturbed >= 0, p - s + k, p - 2 * s + k)
+    x = np.abs(perturbed)
+    if warm is not None:
+        use = np.flatnonzero(warm[:, 0] >= 0)
+        start, solved = _solve(np.take_along_axis(M[use], warm[use][:, None, :], axis=2), perturbed[use][:, :, None])
+        feasible = solved & np.all(start[:, :, 0] >= 0, axis=1)
+        basis[use[feasible]] = warm[use[feasible]]
+        x[use[feasible]] = start[feasible, :, 0]
+    scale = np.maximum(np.abs(c2).max(axis=1), 1e-300)
+    active = np.arange(N)
+    count = 0
+    for step_number in range(pivots):
+        if active.size == 0:
+            break
+        Ma, Ba = M[active], basis[active]
+        Bm = np.take_along_axis(Ma, Ba[:, None, :], axis=2)  # (a, s, s)
+        cb = np.stack([np.take_along_axis(c1[active], Ba, axis=1), np.take_along_axis(c2[active], Ba, axis=1)], axis=2)
+        y, ok = _solve(Bm.transpose(0, 2, 1), cb)  # (a, s, 2)
+        d1 = c1[active] - np.einsum("asp,as->ap", Ma, y[:, :, 0])
+        d2 = c2[active] - np.einsum("asp,as->ap", Ma, y[:, :, 1])
+        phase_one = (d1 < -1e-9).any(axis=1)
+        candidates = np.where(phase_one[:, None], d1 < -1e-9, (d1 <= 1e-9) & (d2 < -1e-12 * scale[active, None]))
+        improving = candidates.any(axis=1)
+        if step_number < 3 * pivots // 4:  # Dantzig's rule first, then Bland's, which cannot cycle
+            enter = np.where(phase_one, d1.argmin(axis=1), np.where(candidates, d2, np.inf).argmin(axis=1))
+        else:
+            enter = candidates.argmax(axis=1)
+        direction, solved = _solve(Bm, np.take_along_axis(Ma, enter[:, None, None], axis=2))
+        direction = direction[:, :, 0]  # (a, s)
+        improving &= ok & solved
+        positive = direction > 1e-9 * np.abs(direction).max(axis=1, keepdims=True)
+        ratios = np.where(positive, x[active] / np.where(positive, direction, 1.0), np.inf)
+        step = ratios.min(axis=1)
+        ties = ratios <= step[:, None] * (1 + 1e-12) + 1e-300
+        leave = np.where(ties, Ba, p).argmin(axis=1)  # the tie of smallest column index
+        move = improving & np.isfinite(step)
+        a = np.flatnonzero(move)
+        idx = active[a]
+        x[idx] = np.maximum(x[idx] - step[a, None] * direction[a], 0.0)
+        x[idx, leave[a]] = step[a]
+        basis[idx, leave[a]] = enter[a]
+        count += int(a.size)
+        active = idx
+    cost1 = (np.take_along_axis(c1, basis, axis=1) * x).sum(axis=1)
+    values = (np.take_along_axis(c2, basis, axis=1) * x).sum(axis=1)
+    # the forces solve M f = b only up to rounding: recompute them from the final basis, drop negative residues
+    f, solved = _solve(np.take_along_axis(M, basis[:, None, :], axis=2), b[:, :, None])
+    exact = np.where(solved[:, None], np.maximum(f[:, :, 0], 0.0), x)
+    values = np.maximum(values, (np.take_along_axis(c2, basis, axis=1) * exact).sum(axis=1))
+    cost1 = np.maximum(cost1, (np.take_along_axis(c1, basis, axis=1) * exact).sum(axis=1))
+    parts = (np.take_along_axis(e, basis, axis=1) * exact).sum(axis=1)
+    return np.where(cost1 > 1e-12, np.inf, values), parts, count, basis, exact
+
+
+def _solve(matrices: np.ndarray, rhs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Batched ``solve(matrices, rhs)``; where a matrix is singular, zeros and False in the second array."""
+    try:
+        return np.linalg.solve(matrices, rhs), np.ones(len(matrices), dtype=bool)
+    except np.linalg.LinAlgError:
+        out, ok = np.zeros(rhs.shape), np.ones(len(matrices), dtype=bool)
+        for i, (matrix, right) in enumerate(zip(matrices, rhs)):
+            try:
+                out[i] = np.linalg.solve(matrix, right)
+            except np.linalg.LinAlgError:
+                ok[i] = False
+        return out, ok
