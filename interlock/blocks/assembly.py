@@ -253,10 +253,27 @@ class Assembly:
         lo, hi = self.bounds[:, 0].min(axis=0), self.bounds[:, 1].max(axis=0)
         return float(np.linalg.norm(hi - lo)) or 1.0
 
+    @cached_property
+    def block_sizes(self) -> np.ndarray:
+        """Each block's size: the diagonal of its bounding box (the local length of its contacts' tolerances)."""
+        if not len(self):
+            return np.ones(0)
+        sizes = np.linalg.norm(self.bounds[:, 1] - self.bounds[:, 0], axis=1)
+        return np.where(sizes > 0, sizes, 1.0)
+
+    @cached_property
+    def block_size(self) -> float:
+        """The typical block size: the median of :attr:`block_sizes` (a far-away block does not change it)."""
+        return float(np.median(self.block_sizes)) if len(self) else 1.0
+
     # --- neighbourhood -----------------------------------------------------------
     @cached_property
     def neighbours(self) -> nx.Graph:
         """Candidate contacts: blocks whose bounding boxes touch (``NEIGHBOUR_RTOL``).
+
+        Each box is padded by ``NEIGHBOUR_RTOL`` times its own size and largest
+        coordinate (its own rounding), never by a fraction of the scene: a
+        block far away adds no candidates near the origin.
 
         Nodes are block indices with attributes ``label``, ``type``,
         ``mirrored`` and ``fixed``.  Every face-to-face contact is an edge of
@@ -264,10 +281,17 @@ class Assembly:
         no face contact.  Built from a spatial index (shapely STRtree on the xy
         boxes, then the z intervals), never from all pairs.
         """
-        return self.neighbour_graph(NEIGHBOUR_RTOL)
+        return self.neighbour_graph(pad=self.local_padding(NEIGHBOUR_RTOL))
 
-    def neighbour_graph(self, rtol: float = NEIGHBOUR_RTOL) -> nx.Graph:
-        """:attr:`neighbours` with another tolerance (relative to :attr:`scale`)."""
+    def local_padding(self, rtol: float) -> np.ndarray:
+        """Per block, ``rtol`` times its size plus its largest coordinate: a distance within its own precision."""
+        return rtol * (self.block_sizes + np.abs(self.bounds).max(axis=(1, 2)))
+
+    def neighbour_graph(self, rtol: float = NEIGHBOUR_RTOL, pad=None) -> nx.Graph:
+        """:attr:`neighbours` with another tolerance: ``rtol`` relative to :attr:`scale`, or ``pad`` per block.
+
+        ``pad`` (a length, or one per block) widens each block's box by that much.
+        """
         graph = nx.Graph()
         fixed = set(self.frame)
         for i in range(len(self)):
@@ -275,7 +299,7 @@ class Assembly:
                            mirrored=bool(self.mirrored[i]), fixed=i in fixed)
         if len(self) < 2:
             return graph
-        pad = rtol * self.scale
+        pad = rtol * self.scale if pad is None else np.broadcast_to(np.asarray(pad, dtype=float), (len(self),))[:, None]
         lo, hi = self.bounds[:, 0] - pad, self.bounds[:, 1] + pad
         boxes = shapely.box(lo[:, 0], lo[:, 1], hi[:, 0], hi[:, 1])
         left, right = shapely.STRtree(boxes).query(boxes, predicate="intersects")
@@ -317,7 +341,7 @@ class Assembly:
         Anything computed from the two meshes in each other's frame (contacts,
         overlaps) depends only on the kind, so instanced patches need one
         computation per kind.  Transforms are compared to
-        :data:`KIND_DECIMALS` decimals, lengths over the model size.
+        :data:`KIND_DECIMALS` decimals, lengths over the size of the pair's first block.
 
         Returns
         -------
@@ -332,7 +356,7 @@ class Assembly:
         i, j = pairs.T
         relative = np.linalg.inv(self.transforms[i]) @ self.transforms[j]
         shape = relative[:, :3].copy()
-        shape[:, :, 3] /= self.scale
+        shape[:, :, 3] /= self.block_sizes[i, None]  # lengths over block i's own size, not the scene's
         key = np.hstack([self.types[i, None], self.types[j, None],
                          np.round(shape.reshape(-1, 12), KIND_DECIMALS) + 0.0])
         _, first, kind_of = np.unique(key, axis=0, return_index=True, return_inverse=True)

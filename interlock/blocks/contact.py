@@ -46,10 +46,9 @@ class Contact:
         Orthonormal in-plane vectors with ``basis[0] x basis[1] = normal``.
     deviation : float
         How far the blocks' real faces stray from the modelled common plane
-        over this contact: the flatness of either facet (:attr:`Facets.flatness`)
-        plus the largest distance of a contact vertex from block ``j``'s facet
-        plane (for a contact across a gap, its :attr:`separation`).  Zero up to
-        rounding for faces that really are coplanar.
+        over this contact: the flatness of either facet (:attr:`Facets.flatness`);
+        a gap between them is its :attr:`separation`, never a bend.  Zero up
+        to rounding for faces that really are coplanar.
     planar : bool
         Both facets are planar up to rounding (:attr:`Facets.planar`).  When
         False, the tolerances merged triangles bent by a small angle into one
@@ -62,7 +61,16 @@ class Contact:
         within ``rtol``, and always when ``gap = 0``); for a contact found only
         thanks to ``gap > 0``, the largest distance from block ``j``'s facet
         plane of the overlap's vertices on block ``i``'s facet plane (at most
-        ``(rtol + gap) * scale``; also part of :attr:`deviation`).
+        ``(rtol + gap) * scale``).  In the local model (default search), the
+        largest gap between the two faces over the contact, when beyond
+        their coordinates' last place: a gap within the tolerance is a
+        contact whose play a verdict reports.
+    tolerance : float or None
+        How far the real faces may be from the modelled contact (a length):
+        the rounding of the two blocks' coordinates
+        (:mod:`interlock.verify.precision`) plus, for faces bent within the
+        tolerances, twice their bend.  None for contacts given by hand
+        (:meth:`at_points`): the verdict reads it off the blocks.
     """
 
     i: int
@@ -78,6 +86,7 @@ class Contact:
     deviation: float = 0.0
     planar: bool = True
     separation: float = 0.0
+    tolerance: float | None = None
 
     @classmethod
     def at_points(cls, i: int, j: int, normal, points) -> Contact:

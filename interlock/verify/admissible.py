@@ -46,13 +46,15 @@ def moving_names(blocks) -> str:
     return f"blocks {shown}{more} have"
 
 
-def bent_contacts(contacts, tolerance: float) -> np.ndarray:
+def bent_contacts(contacts, tolerance) -> np.ndarray:
     """Per contact: its faces are planar only within the contact tolerances, and bent by more than ``tolerance``.
 
-    Faces bent by no more than the input's tolerance (a length) are planar as
-    far as the input can tell (float32 rounding bends every face a little).
+    Faces bent by no more than the input's tolerance (a length, or one per
+    contact) are planar as far as the input can tell (float32 rounding bends
+    every face a little).
     """
-    return np.array([not c.planar and c.deviation > tolerance for c in contacts], dtype=bool)
+    limits = np.broadcast_to(np.asarray(tolerance, dtype=float), (len(contacts),))
+    return np.array([not c.planar and c.deviation > t for c, t in zip(contacts, limits)], dtype=bool)
 
 
 def rigid_across_bends(A: InterlockingMatrix, kernel: np.ndarray, bent, centroids) -> np.ndarray:

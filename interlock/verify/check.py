@@ -21,12 +21,13 @@ from interlock.errors import InterlockError
 from interlock.verify.admissible import (MOVING_RTOL, bent_contacts, moving_names, rigid_across_bends, unless_bent,
                                          unless_missed)
 from interlock.verify.budget import Budget, TimeLimitReached
-from interlock.verify.contacts import DEFAULT_CONTACT_RTOL, Contact, contacts as find_contacts, model_contacts
-from interlock.verify.margin import Margin, assess, rounding_tolerance
+from interlock.verify.contacts import Contact, contacts as find_contacts, model_contacts, search_distances
+from interlock.verify.margin import Margin, assess, margin_lower_bound
+from interlock.verify.precision import Precision, block_precision
 from interlock.verify.matrix import InterlockingMatrix, interlocking_matrix
 from interlock.verify.validate import refuse_overlaps_without_contact, validate as check_overlaps
 
-__all__ = ["Verdict", "check", "beyond_first_order", "opening_motion", "FARKAS_CLOSED_RTOLS", "STAGES", "RANK_RTOL", "RANK_CLEAR_RTOL", "GRAM_RESOLUTION", "GRAM_SURE_RTOL", "LP_TOL", "LP_SOLVERS",
+__all__ = ["Verdict", "check", "beyond_first_order", "opening_motion", "contact_tolerances", "FARKAS_CLOSED_RTOLS", "STAGES", "RANK_RTOL", "RANK_CLEAR_RTOL", "GRAM_RESOLUTION", "GRAM_SURE_RTOL", "LP_TOL", "LP_SOLVERS",
            "MOVING_RTOL", "DENSE_COLUMNS", "FIRST_KERNEL_PROBE", "SOLVER_THREADS", "MAX_KERNEL_PROBE", "INVERSE_ITERATIONS"]
 
 #: A singular value at most ``RANK_RTOL * sigma_max`` is zero ...
@@ -275,9 +276,13 @@ def _decide(assembly, frame, translational, certify, rank_rtol, lp_tol, contacts
         with _stage(timings, "validate", progress, budget):
             shallow = check_overlaps(assembly)
     with _stage(timings, "contacts", progress, budget):
-        found = model_contacts(assembly, contacts)
-        if validate:  # overlaps that pass the volume rule must still be touches
-            refuse_overlaps_without_contact(assembly, shallow, found, DEFAULT_CONTACT_RTOL * assembly.scale)
+        precision = block_precision(assembly)
+        found = model_contacts(assembly, contacts, precision)
+        if validate:  # overlaps that pass the volume rule must still be touches, within the pair's own tolerance
+            distance = search_distances(assembly, precision)
+            deep = [o for o in shallow if o.thickness > max(distance[o.i], distance[o.j])]
+            widest = max((max(distance[o.i], distance[o.j]) for o in deep), default=0.0)
+            refuse_overlaps_without_contact(assembly, deep, found, float(widest))
     with _stage(timings, "matrix", progress, budget):
         A = interlocking_matrix(assembly, frame, translational, contacts=found)
     fixed = tuple(sorted(set(range(len(assembly))) - set(A.free.tolist())))
@@ -285,12 +290,10 @@ def _decide(assembly, frame, translational, certify, rank_rtol, lp_tol, contacts
                   "length_scale": A.length_scale}
     if math.isfinite(budget.limit):
         tolerances["time_limit"] = budget.limit
-    # the input's tolerance: given, or read off its coordinates, but only where something needs it
-    limit = None if tolerance is None else (float(tolerance), "given")
-    bent = np.zeros(len(found), dtype=bool)
-    if not all(c.planar for c in found):  # faces bent within the tolerance are planar as far as the input can tell
-        limit = limit or rounding_tolerance(assembly)
-        bent = bent_contacts(found, limit[0])
+    # the input's tolerance per contact: given, or from the rounding of its two blocks and the bend of its faces
+    limits = contact_tolerances(found, precision, tolerance)
+    rounding = contact_tolerances(found, precision, tolerance, bends=False)
+    bent = bent_contacts(found, rounding)  # faces bent within the rounding are planar as far as the input can tell
     base = dict(frame=fixed, shape=A.shape, translational=translational, contacts=len(found),
                 bent_contacts=int(bent.sum()), tolerances=tolerances, timings=timings)
     if len(A.free) == 0:
@@ -336,9 +339,8 @@ def _decide(assembly, frame, translational, certify, rank_rtol, lp_tol, contacts
         if bent.any():
             motions = [unless_bent(v, A, found, bent, assembly.centroids) for v in motions]
         if contacts is not None:  # the caller's contacts may miss faces that touch: the default search is the judge
-            limit = limit or rounding_tolerance(assembly)
-            motions = [unless_missed(v, assembly, find_contacts(assembly, involving=v.moving), limit[0])
-                       if v.interlocked is False else v for v in motions]
+            motions = [_unless_missed(v, assembly, precision, tolerance) if v.interlocked is False else v
+                       for v in motions]
         verdict = next((v for v in motions if v.interlocked is False), motions[0])
     elif stress is not None and rank_clear:
         verdict = Verdict(True, f"positive self-stress on all {A.shape[0]} rows and full column rank",
@@ -351,8 +353,10 @@ def _decide(assembly, frame, translational, certify, rank_rtol, lp_tol, contacts
                           stress=stress, **base)
     if verdict.interlocked is True:
         with _stage(timings, "margin", progress, budget):
-            limit = limit or rounding_tolerance(assembly)
-            verdict = _with_margin(verdict, assess(A, found, assembly.scale, stress, *limit), A, len(assembly))
+            source = "given" if tolerance is not None else _tolerance_source(found, A, precision)
+            verdict = _with_margin(verdict, assess(A, found, assembly.block_size, stress, *_margin_tolerance(
+                found, A, limits, source)), A, len(assembly))
+            verdict = _with_play(verdict, A, found, stress)
     if certify:
         from interlock.verify.certify import certify_verdict
 
@@ -431,6 +435,67 @@ def _stage(timings: dict, name: str, progress, budget: Budget | None = None):
 
 
 # --- numerics ---------------------------------------------------------------------
+
+
+def contact_tolerances(found, precision: Precision, tolerance=None, bends: bool = True) -> np.ndarray:
+    """One length per contact: how far the real faces may be from the modelled contact.
+
+    ``tolerance`` given: that length for every contact.  Otherwise each
+    contact's own :attr:`~interlock.verify.contacts.Contact.tolerance` (the
+    rounding of its two blocks, plus twice the bend of faces bent within the
+    tolerances), or, for contacts given by hand, the rounding of its blocks
+    (:meth:`~interlock.verify.precision.Precision.contact_tolerance`).
+    ``bends=False``: the rounding alone.
+    """
+    if tolerance is not None:
+        return np.full(len(found), float(tolerance))
+    rounding = np.array([precision.contact_tolerance(c.i, c.j) for c in found], dtype=float)
+    if not bends:
+        return rounding
+    own = np.array([np.nan if c.tolerance is None else c.tolerance for c in found], dtype=float)
+    return np.where(np.isnan(own), rounding, np.maximum(own, rounding))
+
+
+def _tolerance_source(found, A: InterlockingMatrix, precision: Precision) -> str:
+    """Where the tolerances of the contacts of free blocks came from, in words ("float32 input; faces bent ...")."""
+    free = set(A.free.tolist())
+    moving = [c for c in found if c.i in free or c.j in free]
+    source = precision.describe(sorted({b for c in moving for b in (c.i, c.j)}))
+    bends = [c.deviation for c in moving if not c.planar]
+    return source + (f"; faces bent by up to {max(bends):.2g}" if bends else "")
+
+
+def _margin_tolerance(found, A: InterlockingMatrix, limits: np.ndarray, source: str):
+    """``(tolerance, source)`` for :func:`~interlock.verify.margin.assess`: the largest tolerance of a contact
+    of a free block (a contact between fixed blocks gives no row)."""
+    free = set(A.free.tolist())
+    mine = [t for c, t in zip(found, limits) if c.i in free or c.j in free]
+    return float(max(mine, default=0.0)), source
+
+
+def _with_play(verdict: Verdict, A: InterlockingMatrix, found, stress) -> Verdict:
+    """An "interlocked" verdict on contacts across gaps, with the play the gaps allow to first order.
+
+    Rows ``r`` of a contact across a gap ``g_r`` (:attr:`~interlock.verify.contacts.Contact.separation`)
+    may close by ``g_r``: every motion with ``A x >= -g`` is a play.  By LP duality with the positive stress
+    (:func:`~interlock.verify.margin.margin_lower_bound` with ``eps = g``) every such motion has
+    ``|x|_inf <= B``: no block turns by more than ``B`` radians nor moves by more than ``B L``.
+    """
+    gaps = np.array([c.separation for c in found], dtype=float)
+    if verdict.interlocked is not True or stress is None or not len(A.row_contact) or not gaps[A.row_contact].any():
+        return verdict
+    rho = margin_lower_bound(A.matrix, gaps[A.row_contact], stress)
+    play = A.length_scale / rho if rho > 0 else math.inf
+    widest = float(gaps[A.row_contact].max())
+    return dataclasses.replace(verdict, status=f"{verdict.status}; play at most {play:.3g}: the largest motion the "
+                                               f"gaps permit (gaps up to {widest:.3g} within the contact tolerance)",
+                               tolerances={**verdict.tolerances, "play": play, "widest_gap": widest})
+
+
+def _unless_missed(verdict: Verdict, assembly: Assembly, precision: Precision, tolerance) -> Verdict:
+    """:func:`~interlock.verify.admissible.unless_missed` against the default search, each contact its tolerance."""
+    reference = find_contacts(assembly, involving=verdict.moving, precision=precision)
+    return unless_missed(verdict, assembly, reference, contact_tolerances(reference, precision, tolerance))
 
 
 def _with_margin(verdict: Verdict, margin: Margin, A: InterlockingMatrix, blocks: int) -> Verdict:

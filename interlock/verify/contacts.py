@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 import shapely
@@ -13,6 +13,7 @@ from interlock.blocks.assembly import NEIGHBOUR_RTOL, Assembly
 from interlock.blocks.contact import Contact, ContactError
 from interlock.verify.facets import (DEFAULT_ANGLE_TOL, DEFAULT_CONTACT_RTOL, PLANAR_ULPS, TINY, Facets, FacetTable,
                                      check_tolerance, clean_polygons, facets)
+from interlock.verify.precision import BEND_FACTOR, PRECISION_FACTOR, block_precision, coordinate_precision
 
 __all__ = [
     "Contact",
@@ -27,6 +28,10 @@ __all__ = [
     "DEFAULT_AREA_RTOL",
     "DEFAULT_GAP_RTOL",
     "PLANAR_ULPS",
+    "SEARCH_RTOL",
+    "MAX_TILT",
+    "PRESS_RTOL",
+    "search_distances",
 ]
 
 #: Contact polygons of area at most this times the model size squared are dropped.
@@ -38,14 +43,25 @@ DEFAULT_GAP_RTOL = 0.0
 #: in plain floating point, GEOS can return a whole square as the overlap of two squares that only
 #: share an edge with 1e-16 noise.
 OVERLAY_GRID_RTOL = 1e-13
+#: The local model finds faces within this fraction of their blocks' size as touching, even where the input's
+#: rounding is finer (float64 geometry computed by a CAD tool or a generator strays by far more than its last
+#: place).  A gap this narrow is a contact with play (docs/interlocking.md); 1e-6 of a block is open.
+SEARCH_RTOL = 1e-9
+#: A facet's angle tolerance grows with its distance tolerance over its diameter (a small facet rounded as
+#: coarsely as a large one tilts more), up to this many radians.
+MAX_TILT = 0.05
+#: Facing faces that cross each other (one presses into the other, as rotated pieces of a file accurate to a
+#: few 1e-5 rad do) are in contact while they disagree by at most this much of the contact's diameter: a tilt
+#: within the default angle tolerance.
+PRESS_RTOL = DEFAULT_ANGLE_TOL
 #: Instanced pairs of one kind (:meth:`Assembly.pair_kinds`) share one contact computation; that path is
 #: taken when kinds are at most this share of the pairs.
 KIND_SHARE = 0.5
 
 
-def contacts(assembly: Assembly, rtol: float = DEFAULT_CONTACT_RTOL, angle_tol: float = DEFAULT_ANGLE_TOL,
+def contacts(assembly: Assembly, rtol: float | None = None, angle_tol: float = DEFAULT_ANGLE_TOL,
              area_rtol: float = DEFAULT_AREA_RTOL, involving=None,
-             gap: float = DEFAULT_GAP_RTOL) -> tuple[Contact, ...]:
+             gap: float = DEFAULT_GAP_RTOL, precision=None) -> tuple[Contact, ...]:
     """All face-to-face contacts between the blocks of an assembly.
 
     Two blocks are in contact where a facet of one and a facet of the other
@@ -70,11 +86,21 @@ def contacts(assembly: Assembly, rtol: float = DEFAULT_CONTACT_RTOL, angle_tol: 
     assembly : Assembly
         The blocks (closed triangle meshes; polygonal faces may be triangulated).
     rtol : float, optional
-        Distance tolerance relative to ``assembly.scale`` (default
-        ``DEFAULT_CONTACT_RTOL`` = 1e-5): facet planes whose offsets differ by at
-        most ``rtol * scale`` coincide (so a gap that narrow still counts as a
-        contact); overlaps thinner than it (twice the area over the perimeter)
-        are edge touches and are dropped; outlines are simplified within it.
+        Default None: tolerances follow each contact (docs/interlocking.md,
+        "Tolerances that follow the contact").  Each block's distance
+        tolerance is :data:`~interlock.verify.precision.PRECISION_FACTOR`
+        times the rounding of its coordinates
+        (:func:`~interlock.verify.precision.block_precision`: float32 at
+        ``|x|`` rounds by ``2^-24 |x|``), at least :data:`SEARCH_RTOL` times
+        its size, plus the bend its faces show; nothing depends on the rest
+        of the scene.  Two facets coincide when their planes are within their
+        tolerances; a gap wider is open, a narrower one is a contact with its
+        :attr:`~Contact.separation`; overlaps thinner than the tolerance
+        (twice the area over the perimeter) are edge touches and dropped;
+        outlines are simplified within it.  A number: one distance tolerance
+        ``rtol * assembly.scale`` for every block (the model of interlock
+        0.2, e.g. ``DEFAULT_CONTACT_RTOL`` = 1e-5, which compas_cra's
+        interfaces use; also the default when ``gap > 0``).
     angle_tol : float, optional
         Angle tolerance in radians (default ``DEFAULT_ANGLE_TOL`` = 1e-4) for
         opposite normals and for grouping triangles into facets.
@@ -83,6 +109,9 @@ def contacts(assembly: Assembly, rtol: float = DEFAULT_CONTACT_RTOL, angle_tol: 
         ``DEFAULT_AREA_RTOL`` = 1e-10).
     involving : iterable of int, optional
         Only contacts of which at least one block is among these (default: all).
+    precision : Precision, optional
+        The blocks' rounding (default: read off the coordinates by
+        :func:`~interlock.verify.precision.block_precision`).
     gap : float, optional
         Gap tolerance relative to ``assembly.scale`` (default
         ``DEFAULT_GAP_RTOL`` = 0: only touching faces).  Facets with opposite
@@ -155,7 +184,7 @@ def contacts(assembly: Assembly, rtol: float = DEFAULT_CONTACT_RTOL, angle_tol: 
     if not isinstance(assembly, Assembly):
         raise ContactError(f"contacts() needs an interlock Assembly, got {type(assembly).__name__}; "
                            "build one with Assembly.from_meshes or Assembly.load")
-    rtol = check_tolerance("rtol", rtol)
+    rtol = None if rtol is None else check_tolerance("rtol", rtol)
     angle_tol = check_tolerance("angle_tol", angle_tol)
     area_rtol = check_tolerance("area_rtol", area_rtol)
     gap = check_tolerance("gap", gap)
@@ -163,8 +192,10 @@ def contacts(assembly: Assembly, rtol: float = DEFAULT_CONTACT_RTOL, angle_tol: 
         raise ContactError(f"angle_tol must be below pi/2 radians, got {angle_tol}")
     if len(assembly) < 2:
         return ()
-    scale = assembly.scale
-    graph = assembly.neighbours if rtol + gap <= NEIGHBOUR_RTOL else assembly.neighbour_graph(rtol + gap)
+    local = _tolerances(assembly, rtol, angle_tol, area_rtol, gap, precision)
+    lean = assembly.local_padding(NEIGHBOUR_RTOL)
+    graph = (assembly.neighbours if np.all(local.search + local.gap <= lean)
+             else assembly.neighbour_graph(pad=local.search + local.gap + lean))
     pairs = np.array(sorted((min(u, v), max(u, v)) for u, v in graph.edges if u != v), dtype=int).reshape(-1, 2)
     if involving is not None:
         pairs = pairs[np.isin(pairs, assembly.block_indices(involving, "involving")).any(axis=1)]
@@ -172,20 +203,73 @@ def contacts(assembly: Assembly, rtol: float = DEFAULT_CONTACT_RTOL, angle_tol: 
         return ()
     kinds, kind_of, relative = assembly.pair_kinds(pairs)
     if len(kinds) > KIND_SHARE * len(pairs):
-        return _pair_contacts(assembly, pairs, scale, rtol, angle_tol, area_rtol, gap)
-    # instanced blocks: one computation per kind of pair, on a stand-in of two blocks, moved to every pair
+        return _pair_contacts(assembly, pairs, local)
+    # instanced blocks: one computation per kind of pair, on a stand-in of two blocks, moved to every pair; each
+    # stand-in block takes the coarsest tolerance of the blocks it stands for
     i, j = pairs[kinds].T
     relative = relative[kinds]
     stand_in = Assembly(assembly.meshes, np.column_stack([assembly.types[i], assembly.types[j]]).ravel(),
                         np.stack([np.broadcast_to(np.eye(4), relative.shape), relative], axis=1).reshape(-1, 4, 4))
-    local = _pair_contacts(stand_in, np.arange(2 * len(kinds)).reshape(-1, 2), scale, rtol, angle_tol, area_rtol,
-                           gap)
+    widest = [np.zeros(2 * len(kinds)) for _ in range(3)]
+    for k, values in enumerate((local.search, local.rounding, local.area)):
+        np.maximum.at(widest[k], 2 * kind_of, values[pairs[:, 0]])
+        np.maximum.at(widest[k], 2 * kind_of + 1, values[pairs[:, 1]])
+    stand_in_tolerances = _Tolerances(*widest, local.grouping, local.angle, local.gap, local.tilt)
+    computed = _pair_contacts(stand_in, np.arange(2 * len(kinds)).reshape(-1, 2), stand_in_tolerances)
     by_kind = {}
-    for contact in local:
+    for contact in computed:
         by_kind.setdefault(contact.i // 2, []).append(contact)
     found = [_moved(contact, int(a), int(b), assembly.transforms[a], assembly.mirrored[a])
              for (a, b), k in zip(pairs, kind_of) for contact in by_kind.get(int(k), ())]
     return tuple(sorted(found, key=lambda c: (c.i, c.j, c.facet_i, c.facet_j)))
+
+
+def search_distances(assembly: Assembly, precision=None) -> np.ndarray:
+    """Per block, the distance within which the default search takes its faces as touching another's.
+
+    :data:`~interlock.verify.precision.PRECISION_FACTOR` times the rounding
+    of its coordinates, at least :data:`SEARCH_RTOL` times its size.
+
+    >>> import trimesh
+    >>> far = [trimesh.creation.box(bounds=[[x, 0, 0], [x + 1, 1, 1]]) for x in (0, 1e9)]
+    >>> search_distances(Assembly.from_meshes(far)).tolist()  # each block its own, however large the scene
+    [1.7320508075688772e-09, 1.7320508075688772e-09]
+    """
+    precision = block_precision(assembly) if precision is None else precision
+    return np.maximum(PRECISION_FACTOR * np.asarray(precision.delta, dtype=float), SEARCH_RTOL * assembly.block_sizes)
+
+
+def _tolerances(assembly, rtol, angle_tol, area_rtol, gap, precision) -> "_Tolerances":
+    """The search's tolerances for :func:`contacts` (arguments as there, already checked)."""
+    scale = assembly.scale
+    if rtol is None and gap > 0:  # interfaces across gaps are compas_assembly's model: relative to the model size
+        rtol = DEFAULT_CONTACT_RTOL
+    if rtol is None:  # the local model: each block's rounding and size, nothing of the scene
+        precision = block_precision(assembly) if precision is None else precision
+        rounding = PRECISION_FACTOR * np.asarray(precision.delta, dtype=float)
+        search = search_distances(assembly, precision)
+        grouping = np.array([max(PRECISION_FACTOR * coordinate_precision(m.vertices)[0], SEARCH_RTOL * m.scale)
+                             for m in assembly.meshes])
+        area_size = assembly.block_sizes
+    else:  # one tolerance relative to the model size, as asked
+        rounding = search = np.full(len(assembly), rtol * scale)
+        grouping = np.full(len(assembly.meshes), rtol * scale)
+        area_size = np.full(len(assembly), scale)
+    return _Tolerances(search, rounding, area_rtol * area_size**2, grouping, angle_tol, gap * scale, rtol is None)
+
+
+@dataclass(frozen=True)
+class _Tolerances:
+    """The contact search's tolerances: per block the search distance, the rounding and the smallest area kept;
+    per mesh type the facet grouping distance; the angle and the absolute gap."""
+
+    search: np.ndarray
+    rounding: np.ndarray
+    area: np.ndarray
+    grouping: np.ndarray
+    angle: float
+    gap: float
+    tilt: bool = True
 
 
 #: ``Assembly.info`` key of contacts given with an assembly (point and line contacts that the face search cannot
@@ -193,7 +277,7 @@ def contacts(assembly: Assembly, rtol: float = DEFAULT_CONTACT_RTOL, angle_tol: 
 GIVEN_CONTACTS = "contacts"
 
 
-def model_contacts(assembly: Assembly, given=None) -> tuple[Contact, ...]:
+def model_contacts(assembly: Assembly, given=None, precision=None) -> tuple[Contact, ...]:
     """The contacts a verdict uses: ``given`` if not None, else those the assembly carries, else :func:`contacts`.
 
     An assembly carries contacts in ``assembly.info[GIVEN_CONTACTS]`` when
@@ -211,15 +295,14 @@ def model_contacts(assembly: Assembly, given=None) -> tuple[Contact, ...]:
         if not all(isinstance(c, Contact) for c in carried):
             raise ContactError(f"assembly.info[{GIVEN_CONTACTS!r}] must hold Contact objects")
         return tuple(carried)
-    return contacts(assembly)
+    return contacts(assembly, precision=precision)
 
 
-def _pair_contacts(assembly, pairs, scale, rtol, angle_tol, area_rtol, gap=0.0) -> tuple[Contact, ...]:
-    """Contacts of the given block pairs, tolerances relative to ``scale``."""
-    table = FacetTable(assembly, rtol * scale, angle_tol, needed=np.unique(pairs))
-    gi, gj = _matches(table, pairs, (rtol + gap) * scale, angle_tol, scale, tilted=gap > 0)
-    grid = 2.0 ** math.floor(math.log2(OVERLAY_GRID_RTOL * scale))  # a power of two keeps dyadic coordinates exact
-    return _overlaps(table, gi, gj, rtol * scale, area_rtol * scale**2, grid, gap * scale)
+def _pair_contacts(assembly, pairs, tolerances: _Tolerances) -> tuple[Contact, ...]:
+    """Contacts of the given block pairs under the per-block ``tolerances``."""
+    table = FacetTable(assembly, tolerances.grouping, tolerances.angle, needed=np.unique(pairs))
+    gi, gj, atol = _matches(table, pairs, tolerances)
+    return _overlaps(table, gi, gj, atol, tolerances)
 
 
 def _moved(contact: Contact, i: int, j: int, transform: np.ndarray, mirrored: bool) -> Contact:
@@ -243,48 +326,67 @@ def _moved(contact: Contact, i: int, j: int, transform: np.ndarray, mirrored: bo
 # --- private helpers --------------------------------------------------------------------------------
 
 
-def _matches(table: FacetTable, pairs, atol, angle_tol, scale, tilted=False):
-    """Global facet indices (gi, gj) of coplanar facets with opposite normals, blocks i < j.
+def _facet_tolerances(table: FacetTable, tolerances: _Tolerances):
+    """Per facet of the table: its distance tolerance (its block's search distance, its mesh's grouping distance,
+    and its own bend) and its angle tolerance (the angle that distance tilts a facet of its diameter by)."""
+    bend = np.where(table.planar, 0.0, table.flatness)
+    distance = np.maximum(tolerances.search[table.block], table.grouping) + bend
+    box = shapely.bounds(table.polygons).reshape(-1, 2, 2)
+    diameter = np.hypot(*(box[:, 1] - box[:, 0]).T)
+    if not tolerances.tilt:
+        return distance, np.full(len(distance), tolerances.angle), diameter
+    tilt = np.minimum(2.0 * distance / np.maximum(diameter, TINY), MAX_TILT)
+    return distance, np.maximum(tolerances.angle, tilt), diameter
 
-    ``tilted``: the centroid of each facet may be farther from the other's plane than ``atol`` by what a tilt
-    within ``angle_tol`` over the facets' radii adds (the overlap is tested later, for gap contacts).
+
+def _matches(table: FacetTable, pairs, tolerances: _Tolerances):
+    """Global facet indices (gi, gj) of coplanar facets with opposite normals, blocks i < j, and their distance
+    tolerances.
+
+    Facets ``f`` of block ``i`` and ``g`` of block ``j`` match when their normals are opposite within the larger of
+    their angle tolerances and each centroid lies within ``d_f + d_g`` (their distance tolerances) of the other's
+    plane, plus what the angle between them adds over the distance of their centroids.  With a gap, facets up to
+    ``gap`` farther apart match too (the overlap is tested later).
     """
-    lo, hi = table.origins.min(axis=0), table.origins.max(axis=0)
-    centre = (lo + hi) / 2
-    reach = max(scale, float(np.linalg.norm(hi - lo)))
-    # |n_i + n_j| <= angle_tol and |d_i + d_j| <= atol + angle_tol * reach / 2 for offsets d = n.(o - centre)
-    a = max(angle_tol, TINY)
-    t = max(atol + angle_tol * reach, TINY * scale)
-    offset = np.einsum("fi,fi->f", table.normals, table.origins - centre)
-    points = np.hstack([table.normals / a, offset[:, None] / t])
-    radius = math.sqrt(2) * (1 + 1e-9)
-    # one tree per block i, queried at once with the facets of all its partners j (not pair by pair)
+    distance, angle_of, diameter = _facet_tolerances(table, tolerances)
     pairs = np.asarray(pairs, dtype=int).reshape(-1, 2)
     pairs = pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
+    radius = math.sqrt(2) * (1 + 1e-9)
     gi, gj = [], []
+    # one tree per block i, queried at once with the facets of all its partners j; offsets about block i's
+    # facets' centre, so that nothing depends on where the scene lies
     for i, partners in zip(*_grouped(pairs)):
+        facets_i = np.arange(table.start[i], table.start[i + 1])
         facets_j = np.concatenate([np.arange(table.start[j], table.start[j + 1]) for j in partners])
-        if not len(facets_j) or table.start[i] == table.start[i + 1]:
+        if not len(facets_j) or not len(facets_i):
             continue
-        hits = cKDTree(points[table.start[i]:table.start[i + 1]]).query_ball_point(-points[facets_j], radius)
+        both = np.r_[facets_i, facets_j]
+        centre = table.origins[facets_i].mean(axis=0)
+        reach = float(np.linalg.norm(table.origins[both] - centre, axis=1).max() + diameter[both].max())
+        a = max(float(angle_of[both].max()), TINY)
+        t = max(float(distance[facets_i].max() + distance[facets_j].max()) + tolerances.gap
+                + (2 * a + PRESS_RTOL) * reach,
+                TINY * max(reach, TINY))
+        # |n_i + n_j| <= a and |d_i + d_j| <= t for offsets d = n.(o - centre): within the ball of radius sqrt 2
+        offsets = np.einsum("fi,fi->f", table.normals[both], table.origins[both] - centre)
+        points = np.hstack([table.normals[both] / a, offsets[:, None] / t])
+        hits = cKDTree(points[:len(facets_i)]).query_ball_point(-points[len(facets_i):], radius)
         sizes = np.fromiter(map(len, hits), dtype=int, count=len(hits))
         if sizes.sum():
-            gi.append(table.start[i] + np.concatenate([h for h in hits if h]).astype(int))
+            gi.append(facets_i[np.concatenate([h for h in hits if h]).astype(int)])
             gj.append(np.repeat(facets_j, sizes))
     if not gi:
-        return np.zeros(0, dtype=int), np.zeros(0, dtype=int)
+        return np.zeros(0, dtype=int), np.zeros(0, dtype=int), np.zeros(0)
     gi, gj = np.concatenate(gi), np.concatenate(gj)
     ni, nj = table.normals[gi], table.normals[gj]
     angle = 2 * np.arcsin(np.clip(np.linalg.norm(ni + nj, axis=1) / 2, 0, 1))
     apart = table.origins[gj] - table.origins[gi]
-    slack = atol
-    if tilted:
-        corners = np.abs(shapely.bounds(table.polygons)).reshape(-1, 2, 2).max(axis=1)
-        radius = np.hypot(*corners.T)
-        slack = atol + math.sin(angle_tol) * (radius[gi] + radius[gj])
-    ok = ((angle <= angle_tol) & (np.abs(np.einsum("ki,ki->k", ni, apart)) <= slack)
+    pair_distance = distance[gi] + distance[gj]
+    slack = (pair_distance + tolerances.gap + PRESS_RTOL * np.minimum(diameter[gi], diameter[gj])
+             + np.sin(angle) * (np.linalg.norm(apart, axis=1) + diameter[gi] + diameter[gj]))
+    ok = ((angle <= np.maximum(angle_of[gi], angle_of[gj])) & (np.abs(np.einsum("ki,ki->k", ni, apart)) <= slack)
           & (np.abs(np.einsum("ki,ki->k", nj, apart)) <= slack))
-    return gi[ok], gj[ok]
+    return gi[ok], gj[ok], pair_distance[ok]
 
 
 def _grouped(pairs: np.ndarray):
@@ -293,14 +395,16 @@ def _grouped(pairs: np.ndarray):
     return firsts.tolist(), np.split(pairs[:, 1], starts[1:])
 
 
-def _overlaps(table: FacetTable, gi, gj, atol, area_tol, grid, gap=0.0) -> tuple[Contact, ...]:
+def _overlaps(table: FacetTable, gi, gj, atol, tolerances: _Tolerances) -> tuple[Contact, ...]:
     """Intersect matched facets in block i's facet frame; one Contact per overlap part.
 
-    With ``gap > 0`` (absolute), parts farther than ``atol + gap`` from block j's facet plane are dropped and
-    the others are moved along block i's normal halfway to block j's facet plane (at the part's centroid).
+    ``atol`` is each pair's distance tolerance.  Parts whose vertices lie farther than it (plus the gap) from block
+    j's facet plane are open, not contacts.  With a gap, the others are moved along block i's normal halfway to
+    block j's facet plane (at the part's centroid).
     """
     if not len(gi):
         return ()
+    gap = tolerances.gap
     bi, bj = table.bases[gi], table.bases[gj]
     linear = np.einsum("kar,kbr->kab", bi, bj)  # j's plane coordinates -> i's
     shift = np.einsum("kar,kr->ka", bi, table.origins[gj] - table.origins[gi])
@@ -310,22 +414,32 @@ def _overlaps(table: FacetTable, gi, gj, atol, area_tol, grid, gap=0.0) -> tuple
     moved = shapely.set_coordinates(moved, np.einsum("kab,kb->ka", linear[which], xy) + shift[which])
     # coplanar facets far apart in their plane cannot overlap: skip them before the (costly) overlay
     box_i, box_j = shapely.bounds(table.polygons[gi]), shapely.bounds(moved)
-    apart = np.any((box_i[:, 2:] <= box_j[:, :2] + atol) | (box_j[:, 2:] <= box_i[:, :2] + atol), axis=1)
-    gi, gj, moved = gi[~apart], gj[~apart], moved[~apart]
+    apart = np.any((box_i[:, 2:] <= box_j[:, :2] + atol[:, None]) | (box_j[:, 2:] <= box_i[:, :2] + atol[:, None]),
+                   axis=1)
+    gi, gj, moved, atol = gi[~apart], gj[~apart], moved[~apart], atol[~apart]
     # facets whose outlines do not even touch cannot overlap by more than the area tolerance; the predicate on
     # prepared outlines is far cheaper than the snapped overlay
     shapely.prepare(moved)
     touching = shapely.intersects(moved, table.polygons[gi])
-    gi, gj, moved = gi[touching], gj[touching], moved[touching]
+    gi, gj, moved, atol = gi[touching], gj[touching], moved[touching], atol[touching]
+    if not len(gi):
+        return ()
+    # snap rounding on a grid far below every facet's size (a power of two keeps dyadic coordinates exact): in
+    # plain floating point GEOS can return a whole square as the overlap of two squares sharing an edge
+    box = shapely.bounds(table.polygons[gi])
+    extent = float(np.abs(box).max(initial=0.0)) or 1.0
+    grid = 2.0 ** math.floor(math.log2(OVERLAY_GRID_RTOL * extent))
     overlap = shapely.intersection(table.polygons[gi], moved, grid_size=grid)
     parts, k = shapely.get_parts(overlap, return_index=True)
     polygonal = shapely.get_type_id(parts) == 3
-    parts, k = clean_polygons(parts[polygonal], atol), k[polygonal]
+    parts, k = clean_polygons(parts[polygonal], atol[k[polygonal]]), k[polygonal]
     polygonal = shapely.get_type_id(parts) == 3  # simplification may collapse slivers
     parts, k = parts[polygonal], k[polygonal]
     area, perimeter = shapely.area(parts), shapely.length(parts)
-    keep = (area > area_tol) & (2 * area > atol * perimeter)
-    parts, k, area = parts[keep], k[keep], area[keep]
+    block_i, block_j = table.block[gi[k]], table.block[gj[k]]
+    smallest = np.minimum(tolerances.area[block_i], tolerances.area[block_j])
+    keep = (area > smallest) & (2 * area > atol[k] * perimeter)
+    parts, k, area, block_i, block_j = parts[keep], k[keep], area[keep], block_i[keep], block_j[keep]
     if not len(parts):
         return ()
     # 3D vertices: every ring without its closing repeat
@@ -337,21 +451,28 @@ def _overlaps(table: FacetTable, gi, gj, atol, area_tol, grid, gap=0.0) -> tuple
     g = gi[k[part]]
     points = table.origins[g] + np.einsum("va,var->vr", xy, table.bases[g])
     per_part = np.split(points, np.cumsum(np.bincount(part, minlength=len(parts)))[:-1])
-    block_i, block_j = table.block[gi[k]], table.block[gj[k]]
     facet_i, facet_j = table.local[gi[k]], table.local[gj[k]]
     order = np.lexsort((np.arange(len(parts)), facet_j, facet_i, block_j, block_i))
     if gap > 0:
         centroids = shapely.get_coordinates(shapely.centroid(parts))
+    corners = shapely.bounds(parts).reshape(-1, 2, 2)
+    press = np.maximum(atol[k], PRESS_RTOL * np.hypot(*(corners[:, 1] - corners[:, 0]).T))
     found = []
     for p in order:
         g_i, g_j = gi[k[p]], gj[k[p]]
         vertices, origin = per_part[p], table.origins[g_i].copy()
-        apart = float(np.abs((vertices - table.origins[g_j]) @ table.normals[g_j]).max())
-        separation = 0.0
+        distance = (vertices - table.origins[g_j]) @ table.normals[g_j]  # > 0: a gap, < 0: i presses into j
+        apart, deepest = float(np.abs(distance).max()), float(-distance.min())
+        # faces that cross (one presses into the other) within what a tilt of angle_tol over the contact allows
+        # are pressed together: a contact whose faces disagree by their spread, never a gap
+        pressed = gap == 0 and deepest > atol[k[p]] and apart <= press[p]
+        if apart > atol[k[p]] + gap and not pressed:  # open: farther apart than the tolerance of these faces
+            continue
+        # exact coincidence up to the coordinates' last place; beyond it the faces are a gap apart
+        coincide = PLANAR_ULPS * np.finfo(float).eps * float(np.abs(vertices).max(initial=1.0))
+        separation = max(0.0, float(distance.max())) if apart > coincide and not pressed else 0.0
         if gap > 0:
-            if apart > atol + gap:
-                continue
-            separation = apart if apart > atol else 0.0
+            separation = apart if apart > atol[k[p]] else 0.0
             # to the mid-plane: halfway along n_i from block i's facet plane to block j's, at the centroid
             n_i, n_j = table.normals[g_i], table.normals[g_j]
             centre = origin + centroids[p] @ table.bases[g_i]
@@ -361,8 +482,11 @@ def _overlaps(table: FacetTable, gi, gj, atol, area_tol, grid, gap=0.0) -> tuple
         for array in arrays:
             array.setflags(write=False)
         normal, vertices, origin, basis = arrays
-        deviation = float(table.flatness[g_i] + table.flatness[g_j]) + apart
+        planar = bool(table.planar[g_i] and table.planar[g_j]) and not pressed
+        deviation = float(table.flatness[g_i] + table.flatness[g_j]) + (float(np.ptp(distance)) if pressed else 0.0)
+        rounding = max(tolerances.rounding[block_i[p]], tolerances.rounding[block_j[p]])
+        tolerance = max(rounding, 0.0 if planar else BEND_FACTOR * deviation)
         found.append(Contact(int(block_i[p]), int(block_j[p]), normal, vertices, float(area[p]),
-                             int(facet_i[p]), int(facet_j[p]), parts[p], origin, basis, deviation,
-                             bool(table.planar[g_i] and table.planar[g_j]), separation))
+                             int(facet_i[p]), int(facet_j[p]), parts[p], origin, basis, deviation, planar,
+                             separation, float(tolerance)))
     return tuple(found)

@@ -17,7 +17,7 @@ from interlock.blocks.contact import ContactError, plane_bases
 from interlock.blocks.repair import merge_vertices
 
 __all__ = ["Facets", "FacetTable", "facets", "merged", "clean_polygons", "check_tolerance", "DEFAULT_CONTACT_RTOL",
-           "DEFAULT_ANGLE_TOL", "PLANAR_ULPS", "TINY"]
+           "DEFAULT_ANGLE_TOL", "PLANAR_ULPS", "NOISE_FACTOR", "TINY"]
 
 #: Distance tolerance relative to the model size: two planes closer than this
 #: coincide, a gap narrower than this is a contact, an overlap thinner than this
@@ -34,6 +34,11 @@ DEFAULT_ANGLE_TOL = 1e-4
 #: block is about 25 such units; rounding leaves well under one.
 PLANAR_ULPS = 8
 
+#: A mesh whose nearly parallel neighbouring triangles stray from each other's planes by up to ``s`` (vertex
+#: noise) groups its facets within this many times ``s``: a facet of several noisy triangles strays from its
+#: fitted plane by up to about twice the largest pairwise stray.
+NOISE_FACTOR = 4.0
+
 #: Floor for tolerances of zero (relative; keeps the spatial index's metric finite).
 TINY = 1e-15
 
@@ -49,6 +54,9 @@ class Facets:
     ``flatness[f]`` is the largest distance of a vertex of its triangles from
     its plane, and ``planar[f]`` says whether that is rounding only
     (:data:`PLANAR_ULPS`) rather than a bend the tolerances accepted.
+    ``grouping`` is the distance within which triangles were grouped: the
+    tolerance asked for, or :data:`NOISE_FACTOR` times the noise the mesh
+    shows where that is larger.
     """
 
     normals: np.ndarray
@@ -58,6 +66,7 @@ class Facets:
     faces: tuple[np.ndarray, ...]
     flatness: np.ndarray
     planar: np.ndarray
+    grouping: float = 0.0
 
     def __len__(self) -> int:
         return len(self.normals)
@@ -116,14 +125,16 @@ class FacetTable:
     Blocks that are not needed have no facets in the table.
     """
 
-    def __init__(self, assembly: Assembly, atol: float, angle_tol: float, needed=None):
+    def __init__(self, assembly: Assembly, atol, angle_tol: float, needed=None):
         types = assembly.types
         wanted = np.ones(len(types), dtype=bool)
         if needed is not None:
             wanted = np.zeros(len(types), dtype=bool)
             wanted[np.asarray(needed, dtype=int)] = True
         needed_types = np.unique(types[wanted]).tolist()
-        found = _facets_of([merged(assembly.meshes[t]) for t in needed_types], atol, angle_tol) if needed_types else []
+        atol = np.broadcast_to(np.asarray(atol, dtype=float), (len(assembly.meshes),))
+        found = (_facets_of([merged(assembly.meshes[t]) for t in needed_types], atol[needed_types], angle_tol)
+                 if needed_types else [])
         per_type = dict(zip(needed_types, found))
         counts = np.array([len(per_type[t]) if w else 0 for t, w in zip(types, wanted)], dtype=int)
         self.start = np.concatenate([[0], np.cumsum(counts)])
@@ -133,6 +144,7 @@ class FacetTable:
         self.normals, self.origins = np.empty((total, 3)), np.empty((total, 3))
         self.bases, self.polygons = np.empty((total, 2, 3)), np.empty(total, dtype=object)
         self.flatness, self.planar = np.empty(total), np.empty(total, dtype=bool)
+        self.grouping = np.empty(total)  # the distance within which each facet's triangles were grouped
         rot, shift = assembly.transforms[:, :3, :3], assembly.transforms[:, :3, 3]
         mirrored = assembly.mirrored
         for t, f in per_type.items():
@@ -153,6 +165,7 @@ class FacetTable:
                 self.polygons[rows] = np.tile(polygons, len(blocks))
                 self.flatness[rows] = np.tile(f.flatness, len(blocks))
                 self.planar[rows] = np.tile(f.planar, len(blocks))
+                self.grouping[rows] = f.grouping
 
 
 def merged(mesh: trimesh.Trimesh) -> trimesh.Trimesh:
@@ -173,12 +186,16 @@ def _facets(mesh: trimesh.Trimesh, atol: float, angle_tol: float) -> Facets:
     return _facets_of([mesh], atol, angle_tol)[0]
 
 
-def _facets_of(meshes, atol: float, angle_tol: float) -> list[Facets]:
+def _facets_of(meshes, atol, angle_tol: float) -> list[Facets]:
     """The facets of several meshes at once: one pass of array operations over all their triangles.
 
     The meshes share no vertex, so no facet spans two of them; facets are
-    numbered per mesh by their lowest triangle index.
+    numbered per mesh by their lowest triangle index.  ``atol`` is one
+    distance, or one per mesh; a mesh whose triangles within ``angle_tol``
+    (at most :data:`DEFAULT_ANGLE_TOL`) of each other stray farther from each other's planes (vertex noise) is
+    grouped within :data:`NOISE_FACTOR` times that stray instead.
     """
+    atol = np.broadcast_to(np.asarray(atol, dtype=float), (len(meshes),)).copy()
     vertex_counts = np.array([len(m.vertices) for m in meshes])
     face_counts = np.array([len(m.faces) for m in meshes])
     face_start = np.r_[0, np.cumsum(face_counts)]
@@ -207,7 +224,12 @@ def _facets_of(meshes, atol: float, angle_tol: float) -> list[Facets]:
         unshared = _unshared_vertex(faces[small], faces[big])
         far = np.abs(np.einsum("ij,ij->i", normal[big], vertices[unshared] - tri[big, 0]))
         same_side = np.einsum("ij,ij->i", normal[a], normal[b]) > 0
-        keep = same_side & ((angle <= angle_tol) | (far <= atol))
+        # noise: neighbours whose normals agree within the default angle but whose far vertex strays from the plane
+        nearly = same_side & (angle <= min(angle_tol, DEFAULT_ANGLE_TOL))
+        noise = np.zeros(len(meshes))
+        np.maximum.at(noise, owner[a[nearly]], far[nearly])
+        atol = np.maximum(atol, NOISE_FACTOR * noise)
+        keep = same_side & ((angle <= angle_tol) | (far <= atol[owner[a]]))
     n_faces = len(faces)
     graph = coo_matrix((np.ones(keep.sum()), (adj[keep, 0], adj[keep, 1])), shape=(n_faces, n_faces))
     _, label = connected_components(graph, directed=False)
@@ -217,7 +239,7 @@ def _facets_of(meshes, atol: float, angle_tol: float) -> list[Facets]:
     nrm, org = _planes(label, cross, tri, good)
     dist = np.abs(np.einsum("fvi,fi->fv", tri - org[label][:, None], nrm[label])).max(axis=1)
     bent = np.zeros(label.max() + 1, dtype=bool)
-    np.logical_or.at(bent, label[good], dist[good] > atol)
+    np.logical_or.at(bent, label[good], dist[good] > atol[owner[good]])
     split = bent[label]
     label = np.where(split, label.max() + 1 + np.arange(n_faces), label)
     label[~good] = -1
@@ -241,7 +263,8 @@ def _facets_of(meshes, atol: float, angle_tol: float) -> list[Facets]:
     triangles = shapely.polygons(flat)
     members = np.argsort(lab, kind="stable")
     groups = np.split(members, np.cumsum(np.bincount(lab, minlength=n_facets))[:-1])
-    polygons = clean_polygons(_unions(triangles, lab, n_facets), atol)
+    facet_owner_sorted = owner[np.sort(used[first])]
+    polygons = clean_polygons(_unions(triangles, lab, n_facets), atol[facet_owner_sorted])
     # how far the grouped triangles really are from their common plane: rounding, or a bend within tolerance
     offsets = np.abs(np.einsum("fvi,fi->fv", tri[used] - org[lab][:, None], nrm[lab])).max(axis=1)
     flatness = np.zeros(n_facets)
@@ -257,7 +280,7 @@ def _facets_of(meshes, atol: float, angle_tol: float) -> list[Facets]:
         for array in arrays:
             array.setflags(write=False)
         n_, o_, b_, p_, f_, pl_ = arrays
-        out.append(Facets(n_, o_, b_, p_, tuple(triangles_of[part]), f_, pl_))
+        out.append(Facets(n_, o_, b_, p_, tuple(triangles_of[part]), f_, pl_, float(atol[k])))
         start += count
     return out
 
@@ -321,7 +344,7 @@ def _planes(label, cross, tri, good):
 def clean_polygons(polygons, atol):
     """Drop near-duplicate and near-collinear vertices anywhere in each ring; exteriors counter-clockwise.
 
-    A vertex closer than ``atol`` to the segment joining its two neighbours is
+    ``atol`` is one distance, or one per polygon.  A vertex closer than ``atol`` to the segment joining its two neighbours is
     removed, repeatedly, for all rings at once (each pass removes, in every
     run of such vertices, those nearest to their neighbours' segment, then
     re-checks).  Douglas-Peucker
@@ -335,6 +358,7 @@ def clean_polygons(polygons, atol):
         return np.array([shapely.Polygon()] * len(polygons), dtype=object)
     closing = np.r_[ring_of[1:] != ring_of[:-1], True]
     coords, ring_of = coords[~closing], ring_of[~closing]
+    atol = np.broadcast_to(np.asarray(atol, dtype=float), (len(polygons),))  # one distance, or one per polygon
     while len(coords):
         first = np.r_[0, np.flatnonzero(np.diff(ring_of)) + 1]
         length = np.diff(np.r_[first, len(coords)])
@@ -345,7 +369,7 @@ def clean_polygons(polygons, atol):
         squared = np.einsum("ij,ij->i", ac, ac)
         t = np.clip(np.einsum("ij,ij->i", coords - a, ac) / np.where(squared > 0, squared, 1.0), 0.0, 1.0)
         distance = np.hypot(*(coords - a - t[:, None] * ac).T)
-        near = (distance <= atol) & (length > 3)
+        near = (distance <= atol[polygon_of[ring_of]]) & (length > 3)
         # in a run of removable vertices remove the most collinear first (a corner beside a spurious
         # vertex from nearly parallel edges is farther from its neighbours' segment than the spurious one)
         remove = near & ~(near[prev] & (distance[prev] < distance)) & ~(near[nxt] & (distance[nxt] <= distance))

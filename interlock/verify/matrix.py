@@ -83,8 +83,10 @@ def interlocking_matrix(assembly: Assembly, frame=None, translational: bool = Fa
         ``(-(r_i x n), -n)`` in the columns of ``i``, ``((r_j x n), n)`` in those of ``j``,
 
     with ``r_k = (p - c_k) / L``: twists are about each block's centroid
-    ``c_k`` and lengths are divided by the model size ``L``, which changes no
-    verdict but conditions the matrix (docs/interlocking.md).  ``A x >= 0`` says no
+    ``c_k`` and lengths are divided by the typical block size ``L``
+    (:attr:`~interlock.blocks.Assembly.block_size`, the median, so a block far
+    away does not shrink every moment arm), which changes no verdict but
+    conditions the matrix (docs/interlocking.md).  ``A x >= 0`` says no
     contact vertex moves into the other block.  Frame columns are dropped and
     identical rows merged (the reduced matrix of Def. 3.3).  Translational:
     rows ``(-n)`` / ``(n)``, one per contact.
@@ -115,7 +117,7 @@ def interlocking_matrix(assembly: Assembly, frame=None, translational: bool = Fa
     free = np.array([b for b in range(len(assembly)) if b not in fixed], dtype=int)
     column_of = np.full(len(assembly), -1)
     column_of[free] = np.arange(len(free))
-    length = assembly.scale
+    length = assembly.block_size
     centres = assembly.centroids[free]
     size = 3 if translational else 6
 

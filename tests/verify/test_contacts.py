@@ -149,23 +149,47 @@ def test_overlap_with_a_hole_keeps_the_hole_vertices():
 
 
 def test_gap_against_tolerance():
-    scale = math.sqrt(2**2 + 1 + 1)  # two unit cubes side by side
-    tol = DEFAULT_CONTACT_RTOL * scale
-    assert contacts(Assembly.from_meshes([cube(0, 0), cube(1 + 10 * tol, 0)])) == ()
-    (c,) = contacts(Assembly.from_meshes([cube(0, 0), cube(1 + tol / 10, 0)]))
-    assert c.area == pytest.approx(1)
-    # a wider tolerance finds the wider gap (beyond the cached neighbour graph's padding)
+    # float64 unit cubes: the tolerance follows the blocks (1e-9 of their size), never the scene
+    assert contacts(Assembly.from_meshes([cube(0, 0), cube(1 + 1e-6, 0)])) == ()  # open
+    (c,) = contacts(Assembly.from_meshes([cube(0, 0), cube(1 + 1e-10, 0)]))  # within tolerance: a contact with play
+    assert c.area == pytest.approx(1) and c.separation == pytest.approx(1e-10, rel=1e-3) and c.deviation == 0
+    assert c.tolerance < 1e-12  # the margin's tolerance is the rounding, not the search distance
+    # a far-away block changes nothing
+    far = Assembly.from_meshes([cube(0, 0), cube(1 + 1e-6, 0), cube(1e9, 0)])
+    assert contacts(far) == ()
+    # one tolerance relative to the model size, when asked (the model of interlock 0.2)
     (c,) = contacts(Assembly.from_meshes([cube(0, 0), cube(1.001, 0)]), rtol=1e-3)
     assert c.area == pytest.approx(1) and c.vertices[:, 0] == pytest.approx(1)
     # an overlap thinner than the tolerance is an edge touch
-    assert contacts(Assembly.from_meshes([cube(0, 0), cube(1, 1 - tol / 10)])) == ()
+    assert contacts(Assembly.from_meshes([cube(0, 0), cube(1, 1 - 1e-10)])) == ()
+
+
+def test_float32_blocks_far_from_the_origin_keep_their_contacts():
+    for offset in (0.0, 1e3, 1e5):
+        boxes = [cube(offset + x, offset) for x in range(3)]
+        for box in boxes:
+            box.vertices = np.float32(box.vertices).astype(float)
+        found = contacts(Assembly.from_meshes(boxes))
+        assert _pairs(found) == {(0, 1), (1, 2)}, offset
+        # the tolerance is the rounding of these coordinates (2^-24 |x|), whatever else is in the scene
+        assert max(c.tolerance for c in found) <= 4 * 2.0**-24 * (offset + 4) * (1 + 1e-9)
 
 
 def test_tilted_face_within_angle_tolerance():
+    # faces that cross at a small angle (one presses into the other) are in contact, not planar, with their spread
+    # as tolerance: rotated pieces of a file accurate to a few 1e-5 rad
+    for angle in (1e-11, 3e-5):
+        tilt = trimesh.transformations.rotation_matrix(angle, [0, 1, 0], point=[1, 0.5, 0.5])
+        (c,) = contacts(Assembly.from_meshes([cube(0, 0), cube(1, 0).apply_transform(tilt)]))
+        assert c.separation == 0 and c.tolerance >= 2 * c.deviation * (1 - 1e-9)
+        assert c.planar == (angle < 1e-9) and c.deviation == pytest.approx(angle if angle > 1e-9 else 0, rel=1e-3)
+    # the same tilt about the face's edge opens a wedge: a gap of up to 3e-5, open
+    tilt = trimesh.transformations.rotation_matrix(3e-5, [0, 1, 0], point=[1, 0.5, 0])
+    a = Assembly.from_meshes([cube(0, 0), cube(1, 0).apply_transform(tilt)])
+    assert contacts(a) == ()
     tilt = trimesh.transformations.rotation_matrix(3e-5, [0, 1, 0], point=[1, 0.5, 0.5])
     a = Assembly.from_meshes([cube(0, 0), cube(1, 0).apply_transform(tilt)])
-    assert len(contacts(a)) == 1
-    assert contacts(a, angle_tol=1e-5) == ()
+    assert len(contacts(a, rtol=1e-5)) == 1 and contacts(a, rtol=1e-5, angle_tol=1e-5) == ()
 
 
 def folded_pair(bend):
@@ -223,7 +247,7 @@ def test_gap_bridges_a_narrow_gap_on_the_mid_plane():
     assert sorted(map(tuple, c.vertices.round(9))) == [(1.0005, y, z) for y in (0, 1) for z in (0, 1)]
     np.testing.assert_allclose(c.origin + c.polygon.exterior.coords[0] @ c.basis, c.vertices[0], atol=1e-12)
     # it records the gap it bridges; the faces stay planar, so check() keeps trusting slides across it
-    assert c.separation == pytest.approx(1e-3) and c.deviation == pytest.approx(1e-3) and c.planar
+    assert c.separation == pytest.approx(1e-3) and c.deviation == 0 and c.planar  # a gap is never a bend
     assert "across a gap of up to 0.001" in str(c) and c.to_dict()["separation"] == pytest.approx(1e-3)
     (half,) = contacts(Assembly.from_meshes([cube(0, 0), cube(1.001, 0.5)]), gap=2e-3)
     assert half.area == pytest.approx(0.5)
@@ -389,9 +413,13 @@ def test_topolite_ania(reference_data):
     check_geometry(a, found, atol=1e-5)
     graph = _contact_graph(a, found)
     assert sorted(graph.edges) == [(0, 1), (0, 2), (0, 3), (0, 4)]  # the four pieces rest on piece4_tri
-    assert len(found) == ANIA_CONTACTS
-    # pieces 3 and 2 are rotated by about 30 degrees and accurate to ~4e-5 rad only
-    assert len(contacts(a, angle_tol=1e-6)) == 2
+    # pieces 3 and 2 are rotated by about 30 degrees and accurate to ~4e-5 rad only: one face of each crosses
+    # piece4_tri's, pressed together, and carries the spread (6.5e-7) as a bend; their other faces are 1.2e-6
+    # apart (5e-6 of the piece), open in float64; a tolerance of 1e-5 of the model takes those as contacts too
+    tilted = [c for c in found if c.j in (3, 4)]
+    assert len(found) == 4 and all(not c.planar and 6e-7 < c.deviation < 7e-7 for c in tilted)
+    loose = contacts(a, rtol=1e-5)
+    assert len(loose) == ANIA_CONTACTS and len(contacts(a, rtol=1e-5, angle_tol=1e-6)) == 2
 
 
 # --- invariance (property test) ------------------------------------------------------------
@@ -442,8 +470,8 @@ def test_instanced_pairs_share_one_computation_per_kind(which):
     kinds, _, _ = assembly.pair_kinds(pairs)
     assert len(kinds) <= module.KIND_SHARE * len(pairs)  # the shared path is the one taken
     shared = contacts(assembly)
-    direct = module._pair_contacts(assembly, pairs, assembly.scale, module.DEFAULT_CONTACT_RTOL,
-                                   module.DEFAULT_ANGLE_TOL, module.DEFAULT_AREA_RTOL)
+    tolerances = module._tolerances(assembly, None, module.DEFAULT_ANGLE_TOL, module.DEFAULT_AREA_RTOL, 0.0, None)
+    direct = module._pair_contacts(assembly, pairs, tolerances)
     assert [(c.i, c.j, c.facet_i, c.facet_j) for c in shared] == [(c.i, c.j, c.facet_i, c.facet_j) for c in direct]
     for c, d in zip(shared, direct):
         assert c.area == pytest.approx(d.area, rel=1e-12)
