@@ -53,7 +53,6 @@ proved values.  Cost per pass: about ``(rows + 12 blocks)`` small LPs.
 from __future__ import annotations
 
 import math
-import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -64,7 +63,7 @@ from interlock.errors import InterlockError
 
 __all__ = ["LoadPathBound", "load_path_bound", "LOAD_PATH_PASSES", "LOAD_PATH_PIVOTS", "LOAD_PATH_SAFETY",
            "LOAD_PATH_STALL", "LOAD_PATH_SLACK",
-           "LOAD_PATH_IMPROVEMENTS", "LOAD_PATH_FIRST_TRY", "LoadPathError"]
+           "LOAD_PATH_IMPROVEMENTS", "LOAD_PATH_EVALUATION_STEPS", "LOAD_PATH_FIRST_TRY", "LoadPathError"]
 
 #: Passes over the layers at most (outside in, inside out, ...).  RhomBlock hexagons rounded to float32
 #: reach their best bound within 4 to 6 passes (measured up to n = 12).
@@ -79,6 +78,10 @@ LOAD_PATH_SAFETY = 1e-6
 LOAD_PATH_PERTURBATION = 1e-7
 #: The values that have settled are inflated by this share and then checked as a strict supersolution (the proof).
 LOAD_PATH_SLACK = 0.05
+#: Value-iteration steps at most when a policy's costs are evaluated (each one product with the sparse ``P``).
+LOAD_PATH_EVALUATION_STEPS = 1500
+#: A policy whose evaluated cost passes this many times the total of its tolerances paid is improper.
+LOAD_PATH_DIVERGED = 1e3
 #: Policy-iteration steps at most (each: one pass and one sparse solve).
 LOAD_PATH_IMPROVEMENTS = 3
 #: The first pass after which the local solutions are evaluated (tried as certificates); earlier ones rarely are.
@@ -309,8 +312,10 @@ class _Paths:
         on).  A ``gamma > 0`` with ``c + P gamma <= gamma`` and ``c > 0``
         gives ``P gamma < gamma``, so the spectral radius of ``P`` is below 1:
         the recursion converges to a certificate of cost ``(I - P)^-1 c <=
-        gamma``.  The computed solution is inflated by ``LOAD_PATH_SAFETY``
-        and that inequality checked.
+        gamma``.  The costs are found by value iteration from the current
+        values (at most :data:`LOAD_PATH_EVALUATION_STEPS` steps), inflated
+        by the least share (at most :data:`LOAD_PATH_SLACK`) that makes them
+        a supersolution, and that inequality is checked.
         """
         incidences, values, parts, used, forces = policy
         count = len(self.gamma)
@@ -331,15 +336,20 @@ class _Paths:
         take = (links >= 0) & (weights > 0)
         P = sp.csr_matrix((weights[take], (rows[take], index[links[take]])), shape=(keep.sum(), keep.sum()))
         c = parts[keep]
-        try:
-            with warnings.catch_warnings():  # a singular system (a policy that proves nothing) gives NaN: judged below
-                warnings.simplefilter("ignore", scipy.sparse.linalg.MatrixRankWarning)
-                solution = scipy.sparse.linalg.spsolve((sp.identity(P.shape[0], format="csc") - P).tocsc(), c)
-        except RuntimeError:
+        solution = np.maximum(self.gamma[incidences[keep]], c)
+        for _ in range(0, LOAD_PATH_EVALUATION_STEPS, 25):
+            for _ in range(25):  # the costs of the fixed policy, from the current values (value iteration)
+                solution = c + P @ solution
+            if not np.all(np.isfinite(solution)) or solution.max() > LOAD_PATH_DIVERGED * c.max() * len(c):
+                return False  # the loads circulate: an improper policy
+            passed = solution - P @ solution  # a supersolution times (1 + eta) needs (1 + eta) passed >= c
+            if np.all(passed > 0):
+                eta = max(float(np.max(c / passed)) - 1.0, 0.0) + LOAD_PATH_SAFETY
+                if eta <= LOAD_PATH_SLACK:
+                    solution = solution * (1.0 + eta)
+                    break
+        else:
             return False
-        if not np.all(np.isfinite(solution)) or np.any(solution <= 0):
-            return False
-        solution = solution * (1.0 + LOAD_PATH_SAFETY)
         if np.any(c + P @ solution > solution):
             return False
         self.gamma[:] = np.inf
@@ -367,15 +377,16 @@ def _layers(paths: _Paths, blocks: int) -> list[np.ndarray]:
 
 
 def _simplex(M: np.ndarray, c: np.ndarray, e: np.ndarray, b: np.ndarray, pivots: int, warm=None):
-    """``min c . f`` subject to ``M f = b``, ``f >= 0``, for a stack of small LPs: (values, ``e . f``, pivots done).
+    """``min c . f`` subject to ``M f = b``, ``f >= 0``, for a stack of small LPs.
 
     ``M`` has shape ``(N, s, p)`` whose last ``2 s`` columns are ``-I, +I``;
     columns of infinite cost are allowed (phase one keeps them at zero: the
-    value is ``inf`` where it cannot).  Primal simplex from the slack basis,
-    Dantzig's rule, vectorised over the stack; every iterate is feasible, so
-    the value returned (the cost of the last basis) is that of a feasible
-    point even where the pivots ran out.  ``warm``: a basis per LP to start
-    from where it is still feasible (-1 entries: none).  Returns (values,
+    value is ``inf`` where it cannot).  Revised primal simplex from the slack
+    basis (or ``warm``, a basis per LP, -1 for none, where still feasible),
+    the inverse basis updated by each pivot, Dantzig's rule and then Bland's,
+    vectorised over the stack.  Every iterate is feasible, so the value of
+    the last basis is that of a feasible point even where the pivots ran out;
+    the final forces are solved again from the basis.  Returns (values,
     ``e . f``, pivots done, final bases, the forces on them).
     """
     N, s, p = M.shape
@@ -384,65 +395,86 @@ def _simplex(M: np.ndarray, c: np.ndarray, e: np.ndarray, b: np.ndarray, pivots:
     infinite = ~np.isfinite(c)
     c1 = infinite.astype(float)  # phase one: the columns that have no proved cost
     c2 = np.where(infinite, 0.0, c)
-    # the slack basis: +e_k (column p - s + k) where b_k >= 0, else -e_k (column p - 2 s + k)
     k = np.arange(s)
     # the right-hand sides perturbed a little (no ties in the ratio test, so no cycling); the final forces
     # are solved again with the true ones
     size = np.abs(b).max(axis=1, keepdims=True)
     perturbed = b + LOAD_PATH_PERTURBATION * size * np.random.default_rng(0).uniform(0.5, 1.0, b.shape) * \
         np.where(b >= 0, 1.0, -1.0)
-    basis = np.where(perturbed >= 0, p - s + k, p - 2 * s + k)
+    # the slack basis: +e_k (column p - s + k) where b_k >= 0, else -e_k (column p - 2 s + k)
+    plus = perturbed >= 0
+    basis = np.where(plus, p - s + k, p - 2 * s + k)
     x = np.abs(perturbed)
+    inverse = np.zeros((N, s, s))
+    inverse[:, k, k] = np.where(plus, 1.0, -1.0)
     if warm is not None:
         use = np.flatnonzero(warm[:, 0] >= 0)
-        start, solved = _solve(np.take_along_axis(M[use], warm[use][:, None, :], axis=2), perturbed[use][:, :, None])
-        feasible = solved & np.all(start[:, :, 0] >= 0, axis=1)
-        basis[use[feasible]] = warm[use[feasible]]
-        x[use[feasible]] = start[feasible, :, 0]
+        if use.size:
+            start, solved = _inverse(np.take_along_axis(M[use], warm[use][:, None, :], axis=2))
+            values = np.einsum("aij,aj->ai", start, perturbed[use])
+            feasible = solved & np.all(values >= 0, axis=1)
+            chosen = use[feasible]
+            basis[chosen], x[chosen], inverse[chosen] = warm[chosen], values[feasible], start[feasible]
     scale = np.maximum(np.abs(c2).max(axis=1), 1e-300)
-    active = np.arange(N)
     count = 0
+    work = np.arange(N)  # the LPs still pivoting (gathered afresh once half of them are done)
+    Mw, c1w, c2w = M, c1, c2
     for step_number in range(pivots):
-        if active.size == 0:
+        if work.size == 0:
             break
-        Ma, Ba = M[active], basis[active]
-        Bm = np.take_along_axis(Ma, Ba[:, None, :], axis=2)  # (a, s, s)
-        cb = np.stack([np.take_along_axis(c1[active], Ba, axis=1), np.take_along_axis(c2[active], Ba, axis=1)], axis=2)
-        y, ok = _solve(Bm.transpose(0, 2, 1), cb)  # (a, s, 2)
-        d1 = c1[active] - np.einsum("asp,as->ap", Ma, y[:, :, 0])
-        d2 = c2[active] - np.einsum("asp,as->ap", Ma, y[:, :, 1])
+        Bi, Ba = inverse[work], basis[work]
+        y1 = np.einsum("aji,aj->ai", Bi, np.take_along_axis(c1w, Ba, axis=1))
+        y2 = np.einsum("aji,aj->ai", Bi, np.take_along_axis(c2w, Ba, axis=1))
+        d1 = c1w - np.einsum("asp,as->ap", Mw, y1)
+        d2 = c2w - np.einsum("asp,as->ap", Mw, y2)
         phase_one = (d1 < -1e-9).any(axis=1)
-        candidates = np.where(phase_one[:, None], d1 < -1e-9, (d1 <= 1e-9) & (d2 < -1e-12 * scale[active, None]))
+        candidates = np.where(phase_one[:, None], d1 < -1e-9, (d1 <= 1e-9) & (d2 < -1e-12 * scale[work, None]))
         improving = candidates.any(axis=1)
         if step_number < 3 * pivots // 4:  # Dantzig's rule first, then Bland's, which cannot cycle
             enter = np.where(phase_one, d1.argmin(axis=1), np.where(candidates, d2, np.inf).argmin(axis=1))
         else:
             enter = candidates.argmax(axis=1)
-        direction, solved = _solve(Bm, np.take_along_axis(Ma, enter[:, None, None], axis=2))
-        direction = direction[:, :, 0]  # (a, s)
-        improving &= ok & solved
+        column = np.take_along_axis(Mw, enter[:, None, None], axis=2)[:, :, 0]
+        direction = np.einsum("aij,aj->ai", Bi, column)
         positive = direction > 1e-9 * np.abs(direction).max(axis=1, keepdims=True)
-        ratios = np.where(positive, x[active] / np.where(positive, direction, 1.0), np.inf)
+        ratios = np.where(positive, x[work] / np.where(positive, direction, 1.0), np.inf)
         step = ratios.min(axis=1)
         ties = ratios <= step[:, None] * (1 + 1e-12) + 1e-300
         leave = np.where(ties, Ba, p).argmin(axis=1)  # the tie of smallest column index
         move = improving & np.isfinite(step)
         a = np.flatnonzero(move)
-        idx = active[a]
-        x[idx] = np.maximum(x[idx] - step[a, None] * direction[a], 0.0)
-        x[idx, leave[a]] = step[a]
-        basis[idx, leave[a]] = enter[a]
+        idx = work[a]
+        # x and the inverse after the pivot: row ``leave`` divided by the pivot, eliminated from the others
+        d, l = direction[a], leave[a]
+        pivot = d[np.arange(a.size), l]
+        x_new = x[idx] - step[a, None] * d
+        x_new[np.arange(a.size), l] = step[a]
+        x[idx] = np.maximum(x_new, 0.0)
+        row = Bi[a, l, :] / pivot[:, None]
+        Bi_new = Bi[a] - d[:, :, None] * row[:, None, :]
+        Bi_new[np.arange(a.size), l, :] = row
+        inverse[idx] = Bi_new
+        basis[idx, l] = enter[a]
         count += int(a.size)
-        active = idx
-    cost1 = (np.take_along_axis(c1, basis, axis=1) * x).sum(axis=1)
-    values = (np.take_along_axis(c2, basis, axis=1) * x).sum(axis=1)
-    # the forces solve M f = b only up to rounding: recompute them from the final basis, drop negative residues
+        if a.size <= work.size // 2:
+            work, Mw, c1w, c2w = idx, M[idx], c1[idx], c2[idx]
+        elif a.size < work.size:
+            work, Mw, c1w, c2w = idx, Mw[a], c1w[a], c2w[a]
+    # the forces solve M f = b only up to rounding: solve them again from the final basis, drop negative residues
     f, solved = _solve(np.take_along_axis(M, basis[:, None, :], axis=2), b[:, :, None])
     exact = np.where(solved[:, None], np.maximum(f[:, :, 0], 0.0), x)
-    values = np.maximum(values, (np.take_along_axis(c2, basis, axis=1) * exact).sum(axis=1))
-    cost1 = np.maximum(cost1, (np.take_along_axis(c1, basis, axis=1) * exact).sum(axis=1))
+    values = np.maximum((np.take_along_axis(c2, basis, axis=1) * x).sum(axis=1),
+                        (np.take_along_axis(c2, basis, axis=1) * exact).sum(axis=1))
+    cost1 = np.maximum((np.take_along_axis(c1, basis, axis=1) * x).sum(axis=1),
+                       (np.take_along_axis(c1, basis, axis=1) * exact).sum(axis=1))
     parts = (np.take_along_axis(e, basis, axis=1) * exact).sum(axis=1)
     return np.where(cost1 > 1e-12, np.inf, values), parts, count, basis, exact
+
+
+def _inverse(matrices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Batched inverses; where a matrix is singular, zeros and False in the second array."""
+    eye = np.broadcast_to(np.eye(matrices.shape[-1]), matrices.shape)
+    return _solve(matrices, eye.copy())
 
 
 def _solve(matrices: np.ndarray, rhs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -144,3 +144,178 @@ def test_a_bad_tolerance_is_a_clear_error(bad):
 
     with pytest.raises(InterlockError, match="tolerance must be a finite length >= 0"):
         check(presets.cube_grid(), tolerance=bad)
+
+
+# --- the load-path bound (interlock/verify/load_paths.py) and assess ------------------------------
+
+
+def _exact_reach(A, eps):
+    """``R = max {||x||_inf : A x >= -eps}`` by the 2n coordinate LPs (inf when P is unbounded)."""
+    import scipy.optimize
+
+    n = A.shape[1]
+    reach = 0.0
+    for j in range(n):
+        for sign in (1.0, -1.0):
+            objective = np.zeros(n)
+            objective[j] = -sign
+            result = scipy.optimize.linprog(objective, A_ub=-A, b_ub=eps, bounds=(None, None), method="highs")
+            if result.status == 3:
+                return np.inf
+            assert result.status == 0
+            reach = max(reach, -result.fun)
+    return reach
+
+
+def _random_blocks(seed, blocks, size, rows):
+    """Rows between random pairs of blocks (or a block and the frame): ``v`` on one, ``-v`` moved on the other."""
+    import scipy.sparse as sp
+
+    rng = np.random.default_rng(seed)
+    dense = np.zeros((rows, blocks * size))
+    for r in range(rows):
+        g = rng.integers(blocks)
+        h = rng.integers(-1, blocks)  # -1: the frame
+        v = rng.normal(size=size)
+        dense[r, g * size:(g + 1) * size] = v
+        if h >= 0 and h != g:
+            dense[r, h * size:(h + 1) * size] = -v + 0.3 * rng.normal(size=size)
+    return sp.csr_matrix(dense), rng.uniform(0.5, 2.0, rows) * 10.0 ** rng.uniform(-4, -2)
+
+
+@settings(max_examples=25, deadline=None, derandomize=True)
+@given(seed=st.integers(0, 2**16), blocks=st.integers(1, 4), size=st.sampled_from([1, 3]),
+       extra=st.integers(0, 12))
+def test_load_path_bound_is_sound(seed, blocks, size, extra):
+    """The proved bound never undercuts the exact LPs: lower bound on the margin <= 1 / R."""
+    from interlock.verify.load_paths import load_path_bound
+
+    A, eps = _random_blocks(seed, blocks, size, rows=blocks * (2 * size + 2) + extra)
+    exact = _exact_reach(A.toarray(), eps)
+    found = load_path_bound(A, eps, block_size=size)
+    assert found.bound >= exact * (1 - 1e-9)
+    assert np.all(found.coordinates.max(axis=1) <= found.bound)
+    if np.isfinite(found.bound):
+        assert found.margin == pytest.approx(1 / found.bound)
+
+
+def test_load_path_bound_is_close_to_exact_on_a_chain():
+    """A chain of three blocks between two walls: the load paths are the exact LPs' duals."""
+    import scipy.sparse as sp
+
+    from interlock.verify.load_paths import load_path_bound
+
+    # blocks 0, 1, 2 on a line, walls at both ends; rows x_g - x_{g-1} >= -eps (a push to the right)...
+    A = sp.csr_matrix(np.array([[1.0, 0, 0], [-1, 1, 0], [0, -1, 1], [0, 0, -1]]))
+    eps = np.array([1e-3, 2e-3, 3e-3, 4e-3])
+    found = load_path_bound(A, eps, block_size=1)
+    assert found.bound == pytest.approx(_exact_reach(A.toarray(), eps), rel=1e-5)
+
+
+@pytest.fixture(scope="module")
+def small_hexagon(tmp_path_factory):
+    """A RhomBlock 6 x 6 x 6 hexagon (108 blocks, ring fixed), turned, written as binary STL and read back."""
+    from interlock.blocks import random_hexagon, rhomblock_assembly
+    from interlock.verify import interlocking_matrix
+
+    made = rhomblock_assembly(random_hexagon(6, 6, 6, seed=0), 0, frame="boundary")
+    turn = Rotation.random(random_state=0).as_matrix()
+    turned = Assembly.from_meshes([trimesh.Trimesh(m.vertices @ turn.T, m.faces) for m in made.world_meshes()],
+                                  frame=made.frame)
+    path = tmp_path_factory.mktemp("hexagon") / "hexagon.stl"
+    export(turned, path)
+    assembly = Assembly.load(path)
+    found = contacts(assembly)
+    return assembly, found, interlocking_matrix(assembly, assembly.frame, contacts=found)
+
+
+def test_load_paths_decide_where_one_stress_did_not(small_hexagon):
+    """At 30 times the float32 tolerance the old bound (one stress) is below 1; the load paths prove > 1."""
+    from interlock.verify.margin import assess, margin_lower_bound, rounding_tolerance, row_tolerances
+
+    assembly, found, A = small_hexagon
+    tolerance, source = rounding_tolerance(assembly)
+    assert source == "float32 input"
+    stress = np.ones(A.shape[0])  # assess needs only that an exact verdict had a stress
+    margin = assess(A, found, assembly.scale, stress, 30 * tolerance, "given")
+    assert margin.lower > 1 and margin.upper_status == "not needed"
+    from interlock.verify.check import check as full_check
+
+    w = full_check(assembly, validate=False, contacts=found).stress
+    old = margin_lower_bound(A.matrix, row_tolerances(A, found, 30 * tolerance), w)
+    assert old < 1 < margin.lower
+
+
+def test_float32_hexagon_is_interlocked_with_a_margin(small_hexagon):
+    assembly, found, _ = small_hexagon
+    verdict = check(assembly, contacts=found)
+    assert verdict.interlocked is True and verdict.margin.lower > 10
+    assert verdict.tolerances["tolerance_from"] == "float32 input"
+
+
+def test_per_contact_tolerances_are_used_as_given(small_hexagon):
+    from interlock.verify.margin import assess
+
+    assembly, found, A = small_hexagon
+    stress = np.ones(A.shape[0])
+    one = assess(A, found, assembly.scale, stress, 1e-6 * assembly.scale, "given")
+    each = assess(A, found, assembly.scale, stress, np.full(len(found), 1e-6 * assembly.scale), "per contact")
+    assert each.per_contact and not one.per_contact and each.source == "per contact"
+    assert each.lower == pytest.approx(one.lower, rel=1e-6)
+    # per contact: a bent face does not replace the tolerance by the global "faces bent by up to"
+    bent = [dataclasses_replace(c, deviation=1e-3 * assembly.scale) for c in found]
+    kept = assess(A, bent, assembly.scale, stress, np.full(len(found), 1e-6 * assembly.scale), "per contact")
+    assert kept.source == "per contact" and kept.tolerance == pytest.approx(1e-6 * assembly.scale)
+    replaced = assess(A, bent, assembly.scale, stress, 1e-6 * assembly.scale, "float32 input")
+    assert replaced.source.startswith("faces bent by up to")
+
+
+def dataclasses_replace(contact, **changes):
+    import dataclasses
+
+    return dataclasses.replace(contact, **changes)
+
+
+@pytest.mark.parametrize("name, kwargs", [
+    ("tolerance", {"tolerance": float("nan")}), ("tolerance", {"tolerance": -1e-6}),
+    ("tolerance", {"tolerance": float("inf")}), ("tolerance", {"tolerance": [1e-6, 2e-6]}),
+    ("scale", {"scale": float("nan")}), ("scale", {"scale": -1.0}), ("scale", {"scale": float("inf")}),
+    ("stress", {"stress": "nan"}), ("per_contact", {"per_contact": "yes"})])
+def test_assess_names_a_bad_number(small_hexagon, name, kwargs):
+    from interlock.verify.margin import MarginError, assess
+
+    assembly, found, A = small_hexagon
+    arguments = {"scale": assembly.scale, "stress": np.ones(A.shape[0]), "tolerance": 1e-6 * assembly.scale}
+    if kwargs.get("stress") == "nan":
+        kwargs = {"stress": np.full(A.shape[0], np.nan)}
+    arguments.update(kwargs)
+    with pytest.raises(MarginError, match=name):
+        assess(A, found, arguments["scale"], arguments["stress"], arguments["tolerance"], "given",
+               **({"per_contact": kwargs["per_contact"]} if "per_contact" in kwargs else {}))
+
+
+@pytest.mark.parametrize("bad", [float("nan"), -1.0, 0.0, float("inf")])
+def test_load_path_bound_refuses_bad_tolerances(bad):
+    import scipy.sparse as sp
+
+    from interlock.verify.load_paths import LoadPathError, load_path_bound
+
+    with pytest.raises(LoadPathError, match="eps"):
+        load_path_bound(sp.csr_matrix(np.array([[1.0], [-1.0]])), np.array([1e-3, bad]), block_size=1)
+
+
+def test_a_failed_upper_bound_is_reported(small_hexagon, monkeypatch):
+    """When the tolerance is too coarse to prove a margin and the motion LPs fail, the verdict says so."""
+    import scipy.optimize
+
+    from interlock.verify import margin as module
+
+    assembly, found, A = small_hexagon
+
+    class Failed:
+        status, x, message = 4, None, "numerical difficulties (test)"
+
+    monkeypatch.setattr(scipy.optimize, "linprog", lambda *args, **kwargs: Failed())
+    result = module.assess(A, found, assembly.scale, np.ones(A.shape[0]), 1e-2 * assembly.scale, "given")
+    assert result.lower <= 1 and np.isinf(result.upper)
+    assert result.upper_status.startswith("solver failed") and "upper bound: solver failed" in str(result)
