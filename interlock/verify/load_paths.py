@@ -1,53 +1,60 @@
-"""A proved lower bound on the margin from load paths: one small LP per block and load, batched.
+"""A proved lower bound on the margin from load paths: small LPs per block and load, batched.
 
 The margin of :mod:`interlock.verify.margin` is ``rho = 1 / R`` with
 ``R = max over x in P of ||x||_inf``, ``P = {x : A x >= -eps}``.  Each
 coordinate bound is an LP whose dual is a *load path*: ``+-x_j <= eps . u``
-for every ``u >= 0`` with ``A^T u = -+e_j`` (forces at the contact vertices
-that carry a unit load on coordinate ``j`` to the frame).  Solving the ``2n``
-LPs is exact but far too slow; one positive self-stress added to a
+for every ``u >= 0`` with ``A^T u = -+e_j`` (compressive forces at the contact
+vertices that carry a unit load on coordinate ``j`` to the frame).  The ``2n``
+LPs are exact but far too slow; one positive self-stress added to a
 least-squares ``u`` (:func:`~interlock.verify.margin.margin_lower_bound`) is
-cheap but pays the stress of the whole assembly for every coordinate, and
+cheap but pays the stress of the whole assembly for every coordinate and
 falls 100 to 300 times short.  :func:`load_path_bound` builds the load paths
 block by block instead.
 
-The argument.  For a free block ``g`` and a load ``l`` on its columns let
-``C(l) = min {eps . u : u >= 0, A^T u = -l}`` (``+inf`` if there is no such
-``u``); then ``l . x <= C(l)`` on ``P`` (weak duality), and ``C`` is convex
-and positively homogeneous.  Write ``a_r^g`` for the part of row ``r`` on the
-columns of block ``g`` and ``o(r)`` for the other block of the row (none for a
-row against the frame).  Take forces ``f_r >= 0`` on the rows of ``g`` and
-slacks ``s+-_k >= 0`` with ``sum_r f_r a_r^g - s+ + s- = -l``.  The forces load
-each neighbour ``o`` with ``f_r a_r^o``; a certificate of cost
-``C(a_r^o)`` per unit carries that on, and ``s+-_k`` is carried by the
-certificates of ``+-e_k`` on ``g`` itself.  Adding them gives a ``u >= 0`` with
-``A^T u = -l``, so
+**Local step.**  For a load ``l`` on the columns of one free block ``g`` let
+``C(l) = min {eps . u : u >= 0, A^T u = -l}`` (``+inf`` if none), so that
+``l . x <= C(l)`` on ``P`` (weak duality).  Write ``a_r^g`` for the part of row
+``r`` on block ``g`` and ``o(r)`` for the row's other block (none against the
+frame).  Forces ``f_r >= 0`` on the rows of ``g`` with ``sum_r f_r a_r^g = -l``
+balance ``l`` on ``g`` and load each neighbour ``o(r)`` with ``f_r a_r^o``.  If
+``u_r >= 0`` carries that (``A^T u_r = -a_r^o``, cost ``gamma_r``), then
+``u = f + sum_r f_r u_r`` has ``A^T u = -l``, ``u >= 0``, so
 
-    C(l) <= sum_r f_r (eps_r + gamma_r) + sum_k (s+_k V_g(+k) + s-_k V_g(-k)),
+    C(l) <= sum_r f_r (eps_r + gamma_r),       gamma_r = 0 against the frame.   (1)
 
-with ``gamma_r`` any proved bound on ``C(a_r^o)`` (0 against the frame) and
-``V_g(+-k)`` any proved bound on ``C(+-e_k)``.  Every feasible ``(f, s)`` gives
-a proved bound, optimal or not: the minimum is a 6-row LP per block and load.
-Starting from ``+inf`` everywhere (columns of infinite cost are kept at zero,
-a first phase), the bounds of the loads ``a_r^g`` (the ``gamma``) and of the
-unit loads ``+-e_k`` (the ``V``) are improved block by block, the blocks in
-layers by their distance from the frame, outside in and back
-(:data:`LOAD_PATH_PASSES` passes at most).  Each value is computed from values
-proved before it, so by induction all are proved, and
+The unknowns are ``gamma_i`` for every *incidence* ``i = (r, g)`` (the load
+``a_r^g``); (1) for ``l = a_r^g`` is one 6-row LP per incidence, and for
+``l = +-e_k`` it gives the coordinate bounds ``V_g(+-k)``.
+
+**The proof.**  Fix for every incidence ``i`` a feasible ``f`` of (1) (a
+*policy*): ``c_i = sum_r f_r eps_r > 0`` and ``P_ij = f_r`` for ``j`` the
+incidence that row ``r`` passes on to.  Any ``gamma > 0`` with
+``c + P gamma <= gamma`` gives ``P gamma <= gamma - c < gamma``, so the spectral
+radius of ``P >= 0`` is below 1 and the recursion ``u_i = f + sum P_ij u_j``
+converges: a certificate for every incidence of cost ``((I - P)^-1 c)_i <=
+gamma_i``.  With those ``gamma``, (1) for ``+-e_k`` proves ``V_g(+-k)`` and
 
     rho >= 1 / max_{g, k, +-} V_g(+-k).
 
-The fixed point is the exact ``R`` up to loads that cancel on one block but
-are carried separately; on RhomBlock hexagons rounded to float32 it is within
-25 % of the exact LPs (``tests/verify/test_margin.py`` compares with them).
-Floating point: the 6 x 6 solves are exact up to rounding, which
-:data:`LOAD_PATH_SAFETY` (a relative inflation of every value) covers;
-negative rounding residues of the forces are dropped.
+**The computation.**  Gauss-Seidel passes of (1) from ``gamma = 0`` over the
+blocks in layers (by distance from the frame, outside in and back) settle
+the local solutions; from pass :data:`LOAD_PATH_FIRST_TRY` on, the last
+pass's solutions are the policy: its costs are found by value iteration,
+inflated by the least share that makes them a supersolution, and the
+inequality checked (:meth:`_Paths.evaluate`); policies that do not pass
+(loads that circulate) are not used.  Then a pass of (1) for the unit loads
+gives ``V``; policy iteration may improve it (:data:`LOAD_PATH_IMPROVEMENTS`).
+On RhomBlock hexagons rounded to float32 the converged bound is within 25 %
+of the exact LPs; the first proof, which decides, within a factor 2 to 20.
 
-The LPs are solved by a primal simplex vectorised over all loads of a layer
-(numpy, 6 x 6 bases): the slacks give a feasible start and every pivot keeps
-feasibility, so stopping after :data:`LOAD_PATH_PIVOTS` pivots still gives
-proved values.  Cost per pass: about ``(rows + 12 blocks)`` small LPs.
+Floating point: the 6 x 6 systems are solved in floats; each value is
+inflated by :data:`LOAD_PATH_SAFETY` and negative rounding residues of the
+forces are dropped, which the inflation covers.  The local LPs are solved by
+a revised primal simplex vectorised over all loads of a layer (numpy, 6 x 6
+bases, the inverse updated per pivot): the slacks give a feasible start
+(phase one), every pivot keeps feasibility, so stopping after
+:data:`LOAD_PATH_PIVOTS` pivots still gives a feasible, hence usable, policy.
+Cost per pass: about ``rows * 2 + 12 * blocks`` LPs of about 6 x 40.
 """
 
 from __future__ import annotations
@@ -82,10 +89,12 @@ LOAD_PATH_SLACK = 0.05
 LOAD_PATH_EVALUATION_STEPS = 1500
 #: A policy whose evaluated cost passes this many times the total of its tolerances paid is improper.
 LOAD_PATH_DIVERGED = 1e3
+#: Blocks whose local LPs are solved in one batch by the Jacobi passes (memory: ~40 kB per block).
+LOAD_PATH_BATCH = 2000
 #: Policy-iteration steps at most (each: one pass and one sparse solve).
 LOAD_PATH_IMPROVEMENTS = 3
 #: The first pass after which the local solutions are evaluated (tried as certificates); earlier ones rarely are.
-LOAD_PATH_FIRST_TRY = 3
+LOAD_PATH_FIRST_TRY = 2
 #: Passes stop once a pass improves the bound by less than this share (the fixed point is near).
 LOAD_PATH_STALL = 0.01
 
@@ -189,12 +198,17 @@ def load_path_bound(A, eps, block_size: int = 6, *, start: float | None = None, 
                 break
             paths.gamma = kept
     for _ in range(LOAD_PATH_IMPROVEMENTS if proper else 0):  # policy iteration: improve, evaluate again
-        policy, count = paths.policy(pivots)  # the values V rest on the proved gamma
+        _, count = paths.policy(pivots, units=True, incidences=False)  # the values V rest on the proved gamma
         total += count
         bound = float(paths.V.max(initial=0.0))
-        if best is None or bound < best.bound:
-            best = LoadPathBound(bound, paths.V.reshape(blocks * block_size, 2).copy(), done, total)
-        if (target is not None and bound <= target) or not paths.evaluate(policy):
+        if best is not None and bound >= (1 - LOAD_PATH_STALL) * best.bound:
+            break
+        best = LoadPathBound(bound, paths.V.reshape(blocks * block_size, 2).copy(), done, total)
+        if target is not None and bound <= target:
+            break
+        policy, count = paths.policy(pivots, units=False, incidences=True)
+        total += count
+        if not paths.evaluate(policy):
             break
     if best is None:
         return LoadPathBound(math.inf, np.full((blocks * block_size, 2), np.inf), done, total)
@@ -239,7 +253,7 @@ class _Paths:
         self.columns[self.block[order], slot] = order
         self.layers = _layers(self, blocks)
 
-    def local(self, layer: np.ndarray, pivots: int, units: bool = True):
+    def local(self, layer: np.ndarray, pivots: int, units: bool = True, incidences: bool = True):
         """The local LPs of the blocks ``layer`` at the current ``gamma``: every incidence load and every ``+-e_k``.
 
         Returns ``(incidences, values, eps_parts, carried, forces)`` for the
@@ -266,7 +280,7 @@ class _Paths:
         # the loads: each incidence of the block, then +e_k and -e_k
         loads = np.concatenate([vectors, np.broadcast_to(eye, (count, size, size)),
                                 np.broadcast_to(-eye, (count, size, size))], axis=1)  # (b, width + 2 size, size)
-        valid = np.concatenate([real, np.full((count, 2 * size), units)], axis=1)
+        valid = np.concatenate([real & incidences, np.full((count, 2 * size), units)], axis=1)
         owner, which = np.nonzero(valid)
         slots = which < width
         warm = np.full((len(owner), size), -1, dtype=np.int64)
@@ -294,11 +308,13 @@ class _Paths:
             done += count
         return [np.concatenate(part) for part in zip(*found)], done
 
-    def policy(self, pivots: int):
-        """One Jacobi pass at the current ``gamma``: the bounds ``V`` it implies and each incidence's local solution."""
+    def policy(self, pivots: int, units: bool, incidences: bool):
+        """One Jacobi pass at the current ``gamma``: the bounds ``V`` it implies and/or each incidence's local solution."""
         done, found = 0, []
-        for layer in self.layers:
-            incidence, (g, k, sign, unit), count = self.local(layer, pivots)
+        everything = np.concatenate(self.layers)
+        for start in range(0, len(everything), LOAD_PATH_BATCH):
+            incidence, (g, k, sign, unit), count = self.local(everything[start:start + LOAD_PATH_BATCH], pivots, units,
+                                                              incidences)
             self.V[g, k, sign] = unit
             found.append(incidence)
             done += count
@@ -337,9 +353,14 @@ class _Paths:
         P = sp.csr_matrix((weights[take], (rows[take], index[links[take]])), shape=(keep.sum(), keep.sum()))
         c = parts[keep]
         solution = np.maximum(self.gamma[incidences[keep]], c)
+        changes = []
         for _ in range(0, LOAD_PATH_EVALUATION_STEPS, 25):
+            before = solution
             for _ in range(25):  # the costs of the fixed policy, from the current values (value iteration)
                 solution = c + P @ solution
+            changes.append(float(np.abs(solution - before).max()))
+            if len(changes) > 4 and changes[-1] > 0.9 * changes[-4]:
+                return False  # not converging: the loads circulate (an improper policy) or too slowly
             if not np.all(np.isfinite(solution)) or solution.max() > LOAD_PATH_DIVERGED * c.max() * len(c):
                 return False  # the loads circulate: an improper policy
             passed = solution - P @ solution  # a supersolution times (1 + eta) needs (1 + eta) passed >= c
@@ -423,10 +444,13 @@ def _simplex(M: np.ndarray, c: np.ndarray, e: np.ndarray, b: np.ndarray, pivots:
         if work.size == 0:
             break
         Bi, Ba = inverse[work], basis[work]
-        y1 = np.einsum("aji,aj->ai", Bi, np.take_along_axis(c1w, Ba, axis=1))
         y2 = np.einsum("aji,aj->ai", Bi, np.take_along_axis(c2w, Ba, axis=1))
-        d1 = c1w - np.einsum("asp,as->ap", Mw, y1)
         d2 = c2w - np.einsum("asp,as->ap", Mw, y2)
+        first = np.take_along_axis(c1w, Ba, axis=1)
+        if first.any():  # some LPs are still in phase one
+            d1 = c1w - np.einsum("asp,as->ap", Mw, np.einsum("aji,aj->ai", Bi, first))
+        else:
+            d1 = c1w
         phase_one = (d1 < -1e-9).any(axis=1)
         candidates = np.where(phase_one[:, None], d1 < -1e-9, (d1 <= 1e-9) & (d2 < -1e-12 * scale[work, None]))
         improving = candidates.any(axis=1)
