@@ -47,6 +47,17 @@ Growth exponents are least-squares slopes of log(seconds) against log(blocks)
 over the sizes where a stage takes more than :data:`FIT_FLOOR` seconds (of
 log(MB) over the sizes above :data:`MEMORY_FIT_FLOOR` MB for memory).
 
+The **float32 family** (:func:`run_float32`, ``scaling_float32.json`` and
+``.png``; issue 35): the same assemblies, ring fixed and block 0 fixed, turned
+by a random rotation (seed: the size), written as binary STL (float32) and
+read back with ``Assembly.load``.  Each size runs ``check(validate=False)`` on
+the turned float64 assembly and on the float32 file alternately, in the same
+process; ``seconds`` are medians of the verdict (contacts through lp, and the
+margin, which only the float32 file needs).  Targets: every float32 verdict
+True or False (never None), equal to the float64 one (0 wrong), in at most
+twice its time (``ratio``).  The chart shows both verdicts' seconds against
+blocks per family, and the ratio.
+
 Reading the chart: one log-log panel of seconds against blocks per family,
 one line per stage (ours solid, naive dashed, the verdict in black), the
 exponent ``~N^k`` in each legend entry; a line that is steeper grows faster,
@@ -72,6 +83,7 @@ import numpy as np
 
 from benchmarks.common import (BLAS_THREADS, limited_blas, load_average, main, naive_verdict, pyplot, save_chart,
                                write_json)
+from interlock.blocks import Assembly
 from interlock import wallpaper
 from interlock.blocks import Assembly, escher_block, patch, random_hexagon, rhomblock_assembly
 from interlock.gallery import export
@@ -195,7 +207,127 @@ def run(quick: bool = False) -> dict:
     print(f"scaling ({'quick' if quick else 'full'}): {payload['seconds']:.0f} s")
     write_json("scaling", payload)
     _chart(payload)
+    payload["float32"] = run_float32(quick)
     return payload
+
+
+# --- the float32 family -----------------------------------------------------------------
+
+#: Stages of the float32 verdict (the float64 one has no margin).
+VERDICT_FLOAT32 = ("contacts", "matrix", "rank", "lp", "margin")
+#: Runs per size at most, and no further pair of runs once the pairs so far plus one would pass this (seconds).
+FLOAT32_RUNS, FLOAT32_BUDGET, FLOAT32_QUICK_BUDGET = 3, 120.0, 2.0
+
+
+def turned(assembly: Assembly, seed: int) -> Assembly:
+    """``assembly`` with every block turned by one random rotation (``seed``), the frame kept (float64)."""
+    import trimesh
+    from scipy.spatial.transform import Rotation
+
+    turn = Rotation.random(random_state=seed).as_matrix()
+    return Assembly.from_meshes([trimesh.Trimesh(m.vertices @ turn.T, m.faces, process=False)
+                                 for m in assembly.world_meshes()], frame=assembly.frame)
+
+
+def run_float32(quick: bool = False) -> dict:
+    """The float32 family: each assembly as float64 and as binary STL read back; verdicts, seconds, ratios."""
+    start, load = time.perf_counter(), load_average()
+    budget = FLOAT32_QUICK_BUDGET if quick else FLOAT32_BUDGET
+    families = {}
+    with tempfile.TemporaryDirectory() as folder, limited_blas():
+        for family in FAMILIES:
+            rows = []
+            for size in family.quick_sizes if quick else family.sizes:
+                rows.append(_float32_row(family, size, Path(folder), budget))
+                _print_float32(family, rows[-1])
+            families[family.name] = {"description": family.description, "size": family.size_name, "rows": rows}
+    every = [row for family in families.values() for row in family["rows"]]
+    payload = {
+        "benchmark": "scaling_float32",
+        "quick": quick,
+        "policy": {"runs": FLOAT32_RUNS, "budget_seconds": budget, "blas_threads": BLAS_THREADS},
+        "load_average_at_start": load,
+        "families": families,
+        "summary": {"verdicts": len(every),
+                    "inconclusive": sum(row["float32"]["interlocked"] is None for row in every),
+                    "wrong": sum(row["float32"]["interlocked"] is not None and not row["agrees"] for row in every),
+                    "over_twice": sum(row["ratio"] > 2 for row in every),
+                    "largest_ratio": max((row["ratio"] for row in every), default=None)},
+        "seconds": time.perf_counter() - start,
+    }
+    print("float32 family: " + ", ".join(f"{k} {v}" for k, v in payload["summary"].items()))
+    write_json("scaling_float32", payload)
+    _float32_chart(payload)
+    return payload
+
+
+def _float32_row(family: Family, size, folder: Path, budget: float) -> dict:
+    """One size: the float64 and the float32 verdicts, alternately, up to :data:`FLOAT32_RUNS` pairs."""
+    made = turned(family.generate(size), seed=int(round(10 * size)))
+    path = folder / "float32.stl"
+    export(made, path)
+    stored = Assembly.load(path)
+    runs, spent = [], 0.0
+    while len(runs) < FLOAT32_RUNS:
+        begin = time.perf_counter()
+        exact = check(made, validate=False)
+        rounded = check(stored, validate=False)
+        runs.append((exact, rounded))
+        last = time.perf_counter() - begin
+        spent += last
+        if spent + last > budget:
+            break
+    exact, rounded = runs[-1]
+    seconds64 = statistics.median(sum(e.timings.get(k, 0.0) for k in VERDICT_FLOAT32) for e, _ in runs)
+    seconds32 = statistics.median(sum(r.timings.get(k, 0.0) for k in VERDICT_FLOAT32) for _, r in runs)
+    margin = rounded.margin
+    return {"size": size, "blocks": len(made), "frame": len(made.frame), "runs": len(runs),
+            "float64": {"interlocked": exact.interlocked, "seconds": seconds64, "shape": list(exact.shape)},
+            "float32": {"interlocked": rounded.interlocked, "seconds": seconds32, "shape": list(rounded.shape),
+                        "margin_seconds": statistics.median(r.timings.get("margin", 0.0) for _, r in runs),
+                        "margin": None if margin is None else margin.to_dict(), "status": rounded.status[:300],
+                        "same_frame": stored.frame == made.frame},
+            "agrees": rounded.interlocked == exact.interlocked, "ratio": seconds32 / seconds64}
+
+
+def _print_float32(family: Family, row: dict) -> None:
+    f32, f64 = row["float32"], row["float64"]
+    margin = f32["margin"]
+    bounds = "" if margin is None else f", margin >= {margin['lower']:.3g}"
+    print(f"float32 {family.name} {family.size_name}={row['size']} ({row['blocks']} blocks): float64 "
+          f"{f64['interlocked']} {f64['seconds']:.3f} s, float32 {f32['interlocked']} {f32['seconds']:.3f} s "
+          f"(margin {f32['margin_seconds']:.3f} s{bounds}), x{row['ratio']:.2f}, agrees {row['agrees']} "
+          f"({row['runs']} runs)", flush=True)
+
+
+def _float32_chart(payload: dict) -> None:
+    plt = pyplot()
+    if plt is None:
+        return
+    fig, grid = plt.subplots(1, 2, figsize=(13, 5))
+    for (name, family), colour in zip(payload["families"].items(), ("C0", "C1", "C2", "C3")):
+        rows = family["rows"]
+        blocks = [row["blocks"] for row in rows]
+        grid[0].loglog(blocks, [row["float64"]["seconds"] for row in rows], "s--", color=colour, ms=3,
+                       label=f"{name}: float64")
+        grid[0].loglog(blocks, [row["float32"]["seconds"] for row in rows], "o-", color=colour, ms=3,
+                       label=f"{name}: float32 STL (margin included)")
+        marks = ["x" if row["float32"]["interlocked"] is None or not row["agrees"] else "o" for row in rows]
+        for b, row, mark in zip(blocks, rows, marks):
+            grid[1].semilogx([b], [row["ratio"]], mark, color=colour, ms=5)
+        grid[1].semilogx(blocks, [row["ratio"] for row in rows], "-", color=colour, lw=1, label=name)
+    grid[1].axhline(2.0, color="grey", ls=":", label="target: 2x")
+    grid[0].set_xlabel("blocks")
+    grid[0].set_ylabel("seconds (median)")
+    grid[0].set_title("verdict of the float64 assembly and of its float32 STL", fontsize=9)
+    grid[1].set_xlabel("blocks")
+    grid[1].set_ylabel("float32 over float64 (x: None or wrong)")
+    grid[1].set_title("float32 verdict time over float64 verdict time", fontsize=9)
+    for ax in grid:
+        ax.legend(fontsize=6.5)
+        ax.grid(True, which="major", alpha=0.3)
+    save_chart(fig, "scaling_float32")
+    plt.close(fig)
 
 
 # --- timings -------------------------------------------------------------------
@@ -468,4 +600,8 @@ def _memory_panel(ax, families: dict) -> None:
 
 
 if __name__ == "__main__":
-    main(run, __doc__)
+    if "--float32" in sys.argv:  # the float32 family alone
+        sys.argv.remove("--float32")
+        main(run_float32, __doc__)
+    else:
+        main(run, __doc__)

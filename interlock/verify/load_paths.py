@@ -89,8 +89,8 @@ LOAD_PATH_SLACK = 0.05
 LOAD_PATH_EVALUATION_STEPS = 1500
 #: A policy whose evaluated cost passes this many times the total of its tolerances paid is improper.
 LOAD_PATH_DIVERGED = 1e3
-#: Blocks whose local LPs are solved in one batch by the Jacobi passes (memory: ~40 kB per block).
-LOAD_PATH_BATCH = 2000
+#: Blocks whose local LPs are solved in one batch by the Jacobi passes (memory: about 100 kB per block).
+LOAD_PATH_BATCH = 500
 #: Policy-iteration steps at most (each: one pass and one sparse solve).
 LOAD_PATH_IMPROVEMENTS = 3
 #: The first pass after which the local solutions are evaluated (tried as certificates); earlier ones rarely are.
