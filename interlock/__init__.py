@@ -11,7 +11,69 @@ disprove that they interlock (``interlock.verify``).
 
 __version__ = "0.1.0"
 
-from interlock import wallpaper
+import importlib
+import sys
+import types
+
+from interlock import wallpaper  # numpy and shapely, which every command uses (the CLI's group names too)
 from interlock.errors import GalleryError, GroupError, InterlockError, LatticeError
 
 __all__ = ["InterlockError", "GroupError", "LatticeError", "GalleryError", "wallpaper", "__version__"]
+
+
+class LazyPackage(types.ModuleType):
+    """A package whose names are imported on first use (:func:`lazy_exports`).
+
+    The import system binds a submodule to the attribute of its name on the
+    package when it loads it; where the package exports a function of that
+    name (``interlock.verify.check``, ``.contacts``, ``.npod``;
+    ``interlock.gallery.export``), the function stays bound instead.
+    """
+
+    def __setattr__(self, name, value):
+        homes = self.__dict__.get("__lazy_homes__", {})
+        if name in homes and isinstance(value, types.ModuleType) and value.__name__ == f"{self.__name__}.{name}":
+            value = getattr(importlib.import_module(homes[name]), name)
+        super().__setattr__(name, value)
+
+
+def lazy_exports(package: str, homes: dict[str, str], fallback=None):
+    """The module ``__getattr__`` and ``__dir__`` (PEP 562) of a package whose names load on first use.
+
+    ``homes`` maps each exported name to the module that defines it; that
+    module is imported when the name is first asked for (``package.name`` or
+    ``from package import name``), so importing the package costs only what
+    a command uses.  Other names are the package's submodules, then
+    ``fallback`` (e.g. :func:`interlock.deprecation.moved` for old paths).
+    The package becomes a :class:`LazyPackage`.
+
+    Examples
+    --------
+    >>> import interlock.gallery.export  # the module, loaded by its name ...
+    >>> callable(interlock.gallery.export)  # ... leaves the function of that name bound
+    True
+    """
+    module = sys.modules[package]
+    module.__dict__["__lazy_homes__"] = dict(homes)
+    module.__class__ = LazyPackage
+
+    def __getattr__(name: str):
+        if name in homes:
+            value = getattr(importlib.import_module(homes[name]), name)
+            module.__dict__[name] = value
+            return value
+        if not name.startswith("__"):
+            try:
+                return importlib.import_module(f"{package}.{name}")
+            except ModuleNotFoundError as error:
+                if error.name != f"{package}.{name}":
+                    raise
+        if fallback is not None:
+            return fallback(name)
+        raise AttributeError(f"module {package!r} has no attribute {name!r}")
+
+    def __dir__():
+        return sorted(set(module.__dict__) | set(homes))
+
+    return __getattr__, __dir__
+

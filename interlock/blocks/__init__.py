@@ -1,5 +1,7 @@
 """Blocks from deformed fundamental domains, RhomBlocks, and assemblies of them.
 
+Each name is imported on first use (:func:`interlock.lazy_exports`).
+
 >>> from interlock import wallpaper
 >>> from interlock.blocks import escher_block, patch
 >>> X = escher_block(wallpaper.group("p6"), {0: [(0.25, 0.08)], 1: [(0.55, 0.15)]})
@@ -7,15 +9,22 @@
 31
 """
 
-from interlock.blocks.arch import semicircular_arch
-from interlock.blocks.assembly import Assembly, AssemblyError, load_3dm, load_compas
-from interlock.blocks.escher import Block, DeformationError, escher_block
-from interlock.blocks import presets
-from interlock.blocks.lozenge import Lozenge, LozengeTiling, TilingError, random_hexagon, staircase
-from interlock.blocks.orbits import cell_patch, cell_reach, patch, periodic_cell
-from interlock.blocks.rhomblock import rhomblock, rhomblock_assembly
+from interlock import lazy_exports
 
 __all__ = ["Assembly", "AssemblyError", "Block", "DeformationError", "escher_block", "patch", "periodic_cell",
            "cell_patch", "cell_reach",
            "presets", "Lozenge", "LozengeTiling", "TilingError", "random_hexagon", "staircase", "rhomblock",
            "rhomblock_assembly", "load_compas", "load_3dm", "semicircular_arch"]
+
+# where each exported name lives (presets is a subpackage)
+_HOMES = {
+    "semicircular_arch": "interlock.blocks.arch",
+    **dict.fromkeys(["Assembly", "AssemblyError", "load_3dm", "load_compas"], "interlock.blocks.assembly"),
+    **dict.fromkeys(["Block", "DeformationError", "escher_block"], "interlock.blocks.escher"),
+    **dict.fromkeys(["Lozenge", "LozengeTiling", "TilingError", "random_hexagon", "staircase"],
+                    "interlock.blocks.lozenge"),
+    **dict.fromkeys(["cell_patch", "cell_reach", "patch", "periodic_cell"], "interlock.blocks.orbits"),
+    **dict.fromkeys(["rhomblock", "rhomblock_assembly"], "interlock.blocks.rhomblock"),
+}
+
+__getattr__, __dir__ = lazy_exports(__name__, _HOMES)

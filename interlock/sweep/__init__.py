@@ -8,12 +8,20 @@
 
 ``run(spec, output="results.jsonl")`` evaluates them on local processes (or on a
 Dask cluster, ``executor=dask.distributed.Client(address)``); ``verdict_map``
-draws a two-parameter sweep.
+draws a two-parameter sweep.  Each name is imported on first use
+(:func:`interlock.lazy_exports`).
 """
 
-from interlock.sweep.record import deformation, evaluate
-from interlock.sweep.run import MAX_POINTS, SweepWarning, check_size, read_records, run
-from interlock.sweep.spec import VERDICTS, SweepError, SweepSpec, load_spec
+from interlock import lazy_exports
 
 __all__ = ["SweepError", "SweepWarning", "SweepSpec", "VERDICTS", "MAX_POINTS", "load_spec", "run", "check_size",
            "read_records", "evaluate", "deformation"]
+
+# where each exported name lives: reading a spec loads neither the blocks nor the verifier
+_HOMES = {
+    **dict.fromkeys(["deformation", "evaluate"], "interlock.sweep.record"),
+    **dict.fromkeys(["MAX_POINTS", "SweepWarning", "check_size", "read_records", "run"], "interlock.sweep.run"),
+    **dict.fromkeys(["VERDICTS", "SweepError", "SweepSpec", "load_spec"], "interlock.sweep.spec"),
+}
+
+__getattr__, __dir__ = lazy_exports(__name__, _HOMES)

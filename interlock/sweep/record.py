@@ -23,8 +23,6 @@ import time
 
 import numpy as np
 
-from interlock.blocks import (DeformationError, TilingError, escher_block, patch, periodic_cell, random_hexagon,
-                              rhomblock_assembly)
 from interlock.sweep.spec import SweepSpec
 
 __all__ = ["evaluate", "evaluate_chunk", "deformation"]
@@ -47,6 +45,8 @@ def evaluate(spec: SweepSpec, index: int, parameters: dict) -> dict:
     >>> [evaluate(spec, i, p)["verdicts"] for i, p in enumerate(spec.points())]
     [{'criterion_4_3': 'fails'}, {'criterion_4_3': 'holds'}]
     """
+    from interlock.blocks import DeformationError, TilingError  # the blocks load in the worker, not with the spec
+
     started = time.perf_counter()
     record = {"index": int(index), "parameters": dict(parameters), "status": "ok", "verdicts": {}, "message": "",
               "tolerances": {}}
@@ -68,6 +68,7 @@ def deformation(spec: SweepSpec, parameters: dict) -> dict:
     ``p + along (q - p) + offset R(q - p)`` with ``R`` the quarter turn to the left.
     """
     from interlock import wallpaper
+    from interlock.blocks import DeformationError
 
     group = wallpaper.group(spec.family["group"])
     corners = np.asarray(group.fundamental_domain().exterior.coords)[:-1]
@@ -86,6 +87,7 @@ def deformation(spec: SweepSpec, parameters: dict) -> dict:
 
 
 def _verdicts(spec: SweepSpec, parameters: dict) -> tuple[dict, dict]:
+    from interlock.blocks import escher_block, patch, periodic_cell, random_hexagon, rhomblock_assembly
     from interlock.verify import check, criterion_4_3, periodic_check
     from interlock.verify.statics import rbe
 
@@ -125,6 +127,8 @@ def _resolve(value, parameters: dict) -> float:
 
 
 def _whole(value: float, what: str) -> int:
+    from interlock.blocks import TilingError
+
     if not float(value).is_integer():
         raise TilingError(f"{what} must be a whole number, got {value}")
     return int(value)

@@ -6,6 +6,9 @@
 - statics (:mod:`interlock.verify.statics`): :func:`rbe`, :func:`cra`, :func:`critical_tilt`;
 - n-pods (:mod:`interlock.verify.npod`): :func:`npod`, :func:`mobility`, :func:`self_motion`, bonds.
 
+Each name is imported on first use (:func:`interlock.lazy_exports`), so a
+command loads only the modules it needs.
+
 >>> import trimesh
 >>> from interlock.blocks import Assembly
 >>> from interlock.verify import check
@@ -14,20 +17,23 @@
 not infinitesimally interlocked: block 4 has a first-order motion that keeps every contact (A x = 0, kernel dimension 1) (A 16x6, rank 5)
 """
 
-from interlock import deprecation
-# The deprecated module paths (interlock.verify.cra, .stability, ...) are loaded first, so that the names
-# bound below (the function ``cra``) are not replaced by those modules when someone imports them later.
-from interlock.verify import cra, cra_compas, cra_ipopt, cra_local, npod_bonds, stability  # noqa: F401, F811
-from interlock.verify.check import Verdict, check
-from interlock.verify.contacts import Contact, contacts
-from interlock.verify.criterion import CriterionResult, criterion_4_3
-from interlock.verify.matrix import InterlockingMatrix, interlocking_matrix
-from interlock.verify.motion import FiniteMotion, MotionError, finite_motion, moved, twist_exponential
-from interlock.verify.npod import (BondConditions, BondSearch, Mobility, NPod, NPodError, ProjectionBond, SelfMotion,
-                                   bond_conditions, leg_rows, mobility, npod, projection_bonds, self_motion)
-from interlock.verify.periodic import PeriodicVerdict, edge_quadruples, periodic_check, symbol
-from interlock.verify.second_order import SecondOrder, prestress_stability, second_order
-from interlock.verify.statics import CRAResult, StabilityResult, cra, critical_tilt, rbe  # noqa: F811
+from interlock import deprecation, lazy_exports
+
+# where each exported name lives
+_HOMES = {
+    **dict.fromkeys(["Verdict", "check"], "interlock.verify.check"),
+    **dict.fromkeys(["Contact", "contacts"], "interlock.verify.contacts"),
+    **dict.fromkeys(["CriterionResult", "criterion_4_3"], "interlock.verify.criterion"),
+    **dict.fromkeys(["InterlockingMatrix", "interlocking_matrix"], "interlock.verify.matrix"),
+    **dict.fromkeys(["FiniteMotion", "MotionError", "finite_motion", "moved", "twist_exponential"],
+                    "interlock.verify.motion"),
+    **dict.fromkeys(["BondConditions", "BondSearch", "Mobility", "NPod", "NPodError", "ProjectionBond", "SelfMotion",
+                     "bond_conditions", "leg_rows", "mobility", "npod", "projection_bonds", "self_motion"],
+                    "interlock.verify.npod"),
+    **dict.fromkeys(["PeriodicVerdict", "edge_quadruples", "periodic_check", "symbol"], "interlock.verify.periodic"),
+    **dict.fromkeys(["SecondOrder", "prestress_stability", "second_order"], "interlock.verify.second_order"),
+    **dict.fromkeys(["CRAResult", "StabilityResult", "cra", "critical_tilt", "rbe"], "interlock.verify.statics"),
+}
 
 __all__ = ["Contact", "contacts", "CriterionResult", "criterion_4_3", "InterlockingMatrix", "interlocking_matrix",
            "Verdict", "check", "PeriodicVerdict", "edge_quadruples", "periodic_check", "symbol",
@@ -38,4 +44,7 @@ __all__ = ["Contact", "contacts", "CriterionResult", "criterion_4_3", "Interlock
            "BondConditions", "bond_conditions", "ProjectionBond", "BondSearch", "projection_bonds"]
 
 # Deprecated: pictures of a motion are made in the gallery (interlock.gallery.motion); removed in interlock 0.3.
-__getattr__ = deprecation.moved(__name__, {"export_motion": "interlock.gallery.motion"})
+# The old module paths (interlock.verify.cra, .stability, ...) are submodules; loading interlock.verify.cra
+# leaves the function cra bound here (interlock.LazyPackage).
+__getattr__, __dir__ = lazy_exports(__name__, _HOMES,
+                                    deprecation.moved(__name__, {"export_motion": "interlock.gallery.motion"}))
