@@ -77,7 +77,7 @@ def test_an_undecided_milp_ends_in_the_coulomb_fixed_point(monkeypatch):
     monkeypatch.setattr(cra_ipopt, "available", lambda: False)  # convex solves only: no CasADi needed
     arch = semicircular_arch(8)  # tilted out of its plane, no quick answer and no MILP answer in 60 s either
     gravity = tilted_gravity("x", 4.0)
-    result = cra(arch, math.tan(math.radians(43)), gravity=gravity, time_limit=0.2)
+    result = cra(arch, math.tan(math.radians(43)), gravity=gravity, milp_nodes=1)
     assert result.status == "stable" and "Coulomb fixed point" in result.message
     assert "did not decide" in result.message
     _certificate_holds(arch, result, gravity)
@@ -91,7 +91,7 @@ def test_an_undecided_milp_ends_in_a_local_solve_from_where_the_arch_settles(mon
     _no_coulomb(monkeypatch)
     arch = semicircular_arch(8)
     gravity = tilted_gravity("x", 4.0)
-    result = cra(arch, math.tan(math.radians(43)), gravity=gravity, time_limit=0.2)
+    result = cra(arch, math.tan(math.radians(43)), gravity=gravity, milp_nodes=1)
     assert result.status == "stable" and "SLSQP" in result.message and "did not decide" in result.message
     _certificate_holds(arch, result, gravity)
 
@@ -103,7 +103,7 @@ def test_an_undecided_milp_ends_in_ipopt_on_problem_11_when_casadi_is_installed(
     _no_coulomb(monkeypatch)
     arch = semicircular_arch(8)
     gravity = tilted_gravity("x", 4.0)
-    result = cra(arch, math.tan(math.radians(43)), gravity=gravity, time_limit=0.2)
+    result = cra(arch, math.tan(math.radians(43)), gravity=gravity, milp_nodes=1)
     assert result.status == "stable" and "IPOPT" in result.message and result.timings["ipopt"] > 0
     _certificate_holds(arch, result, gravity)
 
@@ -115,7 +115,7 @@ def test_without_casadi_an_undecided_answer_says_how_to_get_the_papers_solver(mo
     monkeypatch.setattr(cra_ipopt, "available", lambda: False)
     monkeypatch.setattr(cra_local, "polish", lambda *args, **kwargs: None)  # SLSQP finds nothing either
     _no_coulomb(monkeypatch)
-    result = cra(semicircular_arch(8), math.tan(math.radians(43)), gravity=tilted_gravity("x", 4.0), time_limit=0.2)
+    result = cra(semicircular_arch(8), math.tan(math.radians(43)), gravity=tilted_gravity("x", 4.0), milp_nodes=1)
     assert result.status == "inconclusive" and 'pip install "interlock[nlp]"' in result.message
 
 
@@ -126,7 +126,7 @@ def test_arch_at_rest_stands_on_the_least_friction_equilibrium(voussoirs):
     from interlock.blocks import semicircular_arch
 
     arch = semicircular_arch(voussoirs)
-    result = cra(arch, math.tan(math.radians(43)), time_limit=0.2)
+    result = cra(arch, math.tan(math.radians(43)))
     assert result.status == "stable" and "least-friction" in result.message
     assert result.timings["milp"] == 0.0
     _certificate_holds(arch, result, (0.0, 0.0, -1.0))
@@ -172,10 +172,24 @@ def test_block_between_walls_falls_under_cra_not_rbe():
 
 
 def test_out_of_time_is_inconclusive_not_a_guess(reference_data):
+    # a millisecond is spent before the first solve: the answer says where the time ran out
     assembly, found = _model(reference_data, "A")
     result = cra(assembly, mu=0.84, contacts=found, time_limit=1e-3)
     assert result.status == "inconclusive" and result.stable is None
-    assert "too large" in result.message and "did not decide" in result.message
+    assert result.message.startswith("time limit reached in ")
+
+
+def test_an_undecided_milp_says_its_node_limit(monkeypatch):
+    # the MILP's limit is its branch-and-bound nodes, the same on every machine, never the clock
+    from interlock.blocks import semicircular_arch
+    from interlock.verify.statics import cra_coulomb, cra_ipopt, cra_local
+
+    monkeypatch.setattr(cra_ipopt, "available", lambda: False)
+    monkeypatch.setattr(cra_local, "polish", lambda *args, **kwargs: None)
+    monkeypatch.setattr(cra_coulomb, "coulomb_fixed_point",
+                        lambda *args, **kwargs: cra_coulomb.FixedPoint(None, 0, None, None, ()))
+    result = cra(semicircular_arch(8), math.tan(math.radians(43)), gravity=tilted_gravity("x", 4.0), milp_nodes=1)
+    assert result.status == "inconclusive" and "within milp_nodes = 1 nodes" in result.message
 
 
 @settings(max_examples=8, deadline=None)
@@ -252,7 +266,7 @@ def test_shelf_rbe_holds_it_and_cra_does_not_claim_it_stands(reference_data):
     pytest.importorskip("casadi")
     assembly, found = _model(reference_data, "shelf")
     assert rbe(assembly, 0.9, contacts=found).stable
-    result = cra(assembly, 0.9, contacts=found, time_limit=1.0)
+    result = cra(assembly, 0.9, contacts=found, milp_nodes=1)
     assert result.status == "inconclusive" and "too large" in result.message
     assert "from 3 starts: Infeasible_Problem_Detected" in result.message and "proves nothing" in result.message
     assert "the Coulomb fixed point ran 40 rounds" in result.message and "blocks (9, 10)" in result.message
@@ -263,7 +277,7 @@ def test_shelf_stable_stands_on_a_motion_the_coulomb_fixed_point_finds_and_the_e
     # first); the Coulomb fixed point (convex solves; IPOPT found it before) does, and the exact LP and the
     # independent certificate confirm it: "stable"
     assembly, found = _model(reference_data, "shelf-stable")
-    result = cra(assembly, 0.9, contacts=found, time_limit=2.0)
+    result = cra(assembly, 0.9, contacts=found)
     assert result.status == "stable" and "Coulomb fixed point" in result.message
     assert "before the MILP" in result.message and result.timings["milp"] == 0.0
     _certificate_holds(assembly, result, (0.0, 0.0, -1.0))
@@ -329,6 +343,8 @@ def test_upstream_ratio_eta_over_eps_10_costs_a_degree_on_type_a(reference_data)
     ({"mu": -0.1}, "mu must be"), ({"mu": 0.5, "eps": 0.0}, "eps must be"),
     ({"mu": 0.5, "eps": 1e-3, "eta": 1e-3}, "eps .* smaller than eta"), ({"mu": 0.5, "sectors": 2}, "sectors"),
     ({"mu": 0.5, "force_bound": -1.0}, "force_bound"), ({"mu": 0.5, "time_limit": 0}, "time_limit"),
+    ({"mu": 0.5, "milp_nodes": 0}, "milp_nodes"), ({"mu": 1e-9}, "outside the range the solvers represent"),
+    ({"mu": 1e20}, "outside the range the solvers represent"),
     ({"mu": 0.5, "min_slide": 1e3}, "min_slide must be below"), ({"mu": 0.5, "gravity": (0, 0, 0)}, "gravity"),
 ])
 def test_bad_input_raises(kwargs, message):

@@ -114,7 +114,7 @@ def test_shelf_stable_is_proved_without_ipopt(reference_data, monkeypatch):
     # binaries are undecided in 10 min); the fixed point finds one the exact LP accepts, with CasADi absent
     monkeypatch.setattr(cra_ipopt, "available", lambda: False)
     assembly = load_compas(reference_data / "compas_cra" / "shelf-stable.json")
-    result = cra(assembly, 0.9, contacts=contacts(assembly), time_limit=2.0)
+    result = cra(assembly, 0.9, contacts=contacts(assembly))
     assert result.status == "stable" and "Coulomb fixed point" in result.message
     assert result.timings["milp"] == 0.0 and "ipopt" not in result.timings
 
@@ -139,7 +139,7 @@ def test_progress_names_each_stage_and_round(reference_data):
     # the CLI shows these words on its progress bar: RBE, the quick answers, then one entry per round
     assembly = load_compas(reference_data / "compas_cra" / "shelf-stable.json")
     stages = []
-    result = cra(assembly, 0.9, contacts=contacts(assembly), time_limit=2.0, progress=stages.append)
+    result = cra(assembly, 0.9, contacts=contacts(assembly), progress=stages.append)
     rounds = int(result.message.split("Coulomb fixed point (")[1].split()[0])
     assert stages[:2] == ["RBE", "quick answers"]
     assert stages[2:] == [f"Coulomb fixed point, round {k}" for k in range(1, rounds + 1)]

@@ -238,9 +238,9 @@ def relaxation(problem, b_eq, force_bounds, sectors: int, nodes: int, tightened:
         return None
     if outcome.x is None and "time limit" in str(outcome.message).lower():
         raise TimeLimitReached(stage)
-    if outcome.x is None and outcome.status == 1:
+    if outcome.x is None and (outcome.status == 1 or "solution limit" in str(outcome.message).lower()):
         return (f"the exact route is too large for this model: HiGHS did not decide the MILP "
-                f"({n_z + n_s} binaries) within milp_nodes = {nodes} nodes ({outcome.message})")
+                f"({n_z + n_s} binaries) within milp_nodes = {nodes} nodes")
     if outcome.x is None:
         return f"HiGHS did not decide the MILP ({n_z + n_s} binaries; solver: {outcome.message})"
     x = outcome.x
