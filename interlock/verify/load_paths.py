@@ -68,34 +68,32 @@ import scipy.sparse.linalg
 
 from interlock.errors import InterlockError
 
-__all__ = ["LoadPathBound", "load_path_bound", "LOAD_PATH_PASSES", "LOAD_PATH_PIVOTS", "LOAD_PATH_SAFETY",
-           "LOAD_PATH_STALL", "LOAD_PATH_SLACK",
-           "LOAD_PATH_IMPROVEMENTS", "LOAD_PATH_EVALUATION_STEPS", "LOAD_PATH_FIRST_TRY", "LoadPathError"]
+__all__ = ["LoadPathBound", "LoadPathError", "load_path_bound", "LOAD_PATH_PASSES", "LOAD_PATH_PIVOTS",
+           "LOAD_PATH_SAFETY", "LOAD_PATH_PERTURBATION", "LOAD_PATH_SLACK", "LOAD_PATH_EVALUATION_STEPS",
+           "LOAD_PATH_BATCH", "LOAD_PATH_IMPROVEMENTS", "LOAD_PATH_FIRST_TRY", "LOAD_PATH_STALL"]
 
-#: Passes over the layers at most (outside in, inside out, ...).  RhomBlock hexagons rounded to float32
-#: reach their best bound within 4 to 6 passes (measured up to n = 12).
+#: Gauss-Seidel passes at most before a policy must have proved (outside in, inside out, ...).  RhomBlock
+#: hexagons rounded to float32 prove after 2 passes up to n = 10, after 4 at n = 12.
 LOAD_PATH_PASSES = 12
-#: Simplex pivots per local LP at most; a 6-row LP with about 40 columns needs 6 to 20.  Stopping early keeps
-#: a feasible, hence proved, value.
+#: Simplex pivots per local LP at most; a 6-row LP with about 40 columns needs 6 to 45 from the slacks
+#: (measured on hexagons), 0 to 5 warm.  Stopping early keeps a feasible local solution.
 LOAD_PATH_PIVOTS = 120
 #: Every computed value is multiplied by ``1 + LOAD_PATH_SAFETY``: far above the rounding of 6 x 6 solves
 #: with condition numbers up to ~1e6 (``1e6 * 2^-52`` ~ 2e-10 per step, summed over at most thousands of steps).
 LOAD_PATH_SAFETY = 1e-6
 #: The local LPs' loads are perturbed by this share (random, fixed seed) while pivoting: no degenerate pivots.
 LOAD_PATH_PERTURBATION = 1e-7
-#: The values that have settled are inflated by this share and then checked as a strict supersolution (the proof).
+#: A policy's evaluated costs may be inflated by at most this share to become a supersolution (the proof).
 LOAD_PATH_SLACK = 0.05
 #: Value-iteration steps at most when a policy's costs are evaluated (each one product with the sparse ``P``).
 LOAD_PATH_EVALUATION_STEPS = 1500
-#: A policy whose evaluated cost passes this many times the total of its tolerances paid is improper.
-LOAD_PATH_DIVERGED = 1e3
 #: Blocks whose local LPs are solved in one batch by the Jacobi passes (memory: about 100 kB per block).
 LOAD_PATH_BATCH = 500
-#: Policy-iteration steps at most (each: one pass and one sparse solve).
+#: Policy-iteration steps at most (each: a pass of the unit loads, then of the incidences, and an evaluation).
 LOAD_PATH_IMPROVEMENTS = 3
 #: The first pass after which the local solutions are evaluated (tried as certificates); earlier ones rarely are.
 LOAD_PATH_FIRST_TRY = 2
-#: Passes stop once a pass improves the bound by less than this share (the fixed point is near).
+#: Policy iteration stops once a step improves the bound by less than this share.
 LOAD_PATH_STALL = 0.01
 
 
@@ -108,10 +106,9 @@ class LoadPathBound:
     """What :func:`load_path_bound` proved.
 
     ``bound`` is ``R``: every ``x`` with ``A x >= -eps`` has
-    ``||x||_inf <= bound`` (``inf`` when some coordinate has no load path);
-    ``coordinates`` is that bound per column and sign, shape ``(n, 2)``
-    (``+x_j``, ``-x_j``); ``passes`` how many passes ran and ``pivots`` the
-    simplex pivots in all.
+    ``||x||_inf <= bound`` (``inf``: nothing proved); ``coordinates`` is the
+    bound per column and sign, shape ``(n, 2)`` (``+x_j``, ``-x_j``);
+    ``passes`` the Gauss-Seidel passes and ``pivots`` the simplex pivots.
     """
 
     bound: float
@@ -136,10 +133,10 @@ def load_path_bound(A, eps, block_size: int = 6, *, start: float | None = None, 
     eps : array (m,)
         Positive row tolerances.
     start : float, optional
-        The guess every bound starts from (not a proof; the values only have
-        to settle).  Default: the largest ``eps``.
+        The guess every incidence bound starts from (not a proof; the values
+        only have to settle from below).  Default: 0.
     passes : int
-        Passes over the layers at most.
+        Gauss-Seidel passes at most before a policy must have proved.
     target : float, optional
         Stop as soon as the bound is at most this (e.g. 1: the margin exceeds 1).
     pivots : int
@@ -170,10 +167,9 @@ def load_path_bound(A, eps, block_size: int = 6, *, start: float | None = None, 
         raise LoadPathError(f"eps must hold {m} finite positive row tolerances")
     if not np.all(np.isfinite(A.data)):
         raise LoadPathError("the matrix A has entries that are not finite")
-    if isinstance(passes, bool) or not isinstance(passes, (int, np.integer)) or passes < 1:
-        raise LoadPathError(f"passes must be a positive integer, got {passes!r}")
-    if isinstance(pivots, bool) or not isinstance(pivots, (int, np.integer)) or pivots < 1:
-        raise LoadPathError(f"pivots must be a positive integer, got {pivots!r}")
+    for name, value in (("passes", passes), ("pivots", pivots)):
+        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+            raise LoadPathError(f"{name} must be a positive integer, got {value!r}")
     if start is None:
         start = 0.0
     if isinstance(start, bool) or not isinstance(start, (int, float, np.floating)) or not 0 <= start < math.inf:
@@ -361,8 +357,8 @@ class _Paths:
             changes.append(float(np.abs(solution - before).max()))
             if len(changes) > 4 and changes[-1] > 0.9 * changes[-4]:
                 return False  # not converging: the loads circulate (an improper policy) or too slowly
-            if not np.all(np.isfinite(solution)) or solution.max() > LOAD_PATH_DIVERGED * c.max() * len(c):
-                return False  # the loads circulate: an improper policy
+            if not np.all(np.isfinite(solution)):
+                return False
             passed = solution - P @ solution  # a supersolution times (1 + eta) needs (1 + eta) passed >= c
             if np.all(passed > 0):
                 eta = max(float(np.max(c / passed)) - 1.0, 0.0) + LOAD_PATH_SAFETY
@@ -431,7 +427,8 @@ def _simplex(M: np.ndarray, c: np.ndarray, e: np.ndarray, b: np.ndarray, pivots:
     if warm is not None:
         use = np.flatnonzero(warm[:, 0] >= 0)
         if use.size:
-            start, solved = _inverse(np.take_along_axis(M[use], warm[use][:, None, :], axis=2))
+            start, solved = _solve(np.take_along_axis(M[use], warm[use][:, None, :], axis=2),
+                                   np.broadcast_to(np.eye(s), (use.size, s, s)).copy())
             values = np.einsum("aij,aj->ai", start, perturbed[use])
             feasible = solved & np.all(values >= 0, axis=1)
             chosen = use[feasible]
@@ -493,12 +490,6 @@ def _simplex(M: np.ndarray, c: np.ndarray, e: np.ndarray, b: np.ndarray, pivots:
                        (np.take_along_axis(c1, basis, axis=1) * exact).sum(axis=1))
     parts = (np.take_along_axis(e, basis, axis=1) * exact).sum(axis=1)
     return np.where(cost1 > 1e-12, np.inf, values), parts, count, basis, exact
-
-
-def _inverse(matrices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Batched inverses; where a matrix is singular, zeros and False in the second array."""
-    eye = np.broadcast_to(np.eye(matrices.shape[-1]), matrices.shape)
-    return _solve(matrices, eye.copy())
 
 
 def _solve(matrices: np.ndarray, rhs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
