@@ -283,3 +283,90 @@ def test_armadillo_vault_stands_with_upstream_contacts(reference_data):
     on_supports = [k for k, c in enumerate(result.contacts) if (c.i in vault.frame) != (c.j in vault.frame)]
     vertical = sum(result.resultants[k, 2] * (1 if result.contacts[k].j not in vault.frame else -1) for k in on_supports)
     assert vertical == pytest.approx(weight, rel=1e-6)  # the supports carry the whole weight
+
+
+# --- solver status is never physics; undecided angles; limits ----------------------------------------------------
+
+
+def _squeezed_row():
+    """Three unit cubes in a row, the two ends fixed: the middle one is held by friction alone (every mu > 0)."""
+    return Assembly.from_meshes([trimesh.creation.box(bounds=[[x, 0, 0], [x + 1, 1, 1]]) for x in range(3)],
+                                frame=[0, 2])
+
+
+@pytest.mark.parametrize("mu", [1e-6, 0.5, 1e14, 1e15])
+def test_a_squeezed_row_is_never_called_unstable_by_a_solver(mu):
+    # HiGHS' "Model error" at mu = 1e15 (mu reached its largest matrix value) was printed as "RBE unstable"; the
+    # friction rows are now scaled, and an undecided solve would be "inconclusive (solver: ...)", never "unstable"
+    result = rbe(_squeezed_row(), mu)
+    assert result.stable is not False, result.message
+    assert result.stable is True or result.message.startswith("solver:")
+
+
+@pytest.mark.parametrize("mu", [1e-9, 1e20, -1.0, math.nan])
+def test_mu_outside_the_solvers_range_is_refused_up_front(mu):
+    with pytest.raises(InterlockError, match="mu"):
+        rbe(_squeezed_row(), mu)
+
+
+def test_an_undecided_lp_is_inconclusive_not_unstable(monkeypatch):
+    from interlock.verify.statics.equilibrium import EquilibriumSystem
+
+    monkeypatch.setattr(EquilibriumSystem, "solve_lp",
+                        lambda self, gravity, least_force, budget=None: (None, 4, "solver: HiGHS stalled", 1.0))
+    result = rbe(_stack(), 0.5)
+    assert result.stable is None and result.message == "solver: HiGHS stalled"
+    assert str(result).startswith("RBE inconclusive (solver: HiGHS stalled)")
+    assert result.to_dict()["stable"] is None
+
+
+def test_critical_tilt_of_curve_3_blocks_about_1_minus_1_0_with_its_stored_interfaces(reference_data):
+    # issue 40: HiGHS' simplex ends in its status 15 at 48.75 degrees; the scan raised StabilityError. Clarabel
+    # decides first now, and an angle no solver decides would be carried as "inconclusive" with its reason
+    from interlock.verify.statics import compas_interfaces, tilt_scan
+
+    path = reference_data / "compas_cra" / "curve-3-blocks.json"
+    assembly = load_compas(path)
+    stored = compas_interfaces(path, assembly)
+    assert len(stored) == 40
+    scan = tilt_scan(assembly, (1, -1, 0), 0.84, contacts=stored)
+    assert scan.status in ("decided", "inconclusive") and 0 < scan.angle < 180
+    assert all(reason for _, reason in scan.undecided)
+    assert critical_tilt(assembly, (1, -1, 0), 0.84, contacts=stored) == scan.angle
+
+
+@pytest.mark.parametrize("at, status", [(30.0, "decided"), (20.0, "inconclusive")])
+def test_a_tilt_scan_carries_an_undecided_angle_and_goes_on(monkeypatch, at, status):
+    # an angle that no solver decides counts as not stable (the safe side), is recorded with its reason, and the
+    # bisection goes on below it: past the critical angle (atan 0.5 = 26.57 degrees) the scan still finds it;
+    # below it, the answer is the undecided angle, "inconclusive", with the last stable angle below
+    from interlock.verify.statics import tilt_scan
+    from interlock.verify.statics.equilibrium import EquilibriumSystem
+
+    feasible = EquilibriumSystem.feasible
+    undecided = tilted_gravity("x", at)
+
+    def flaky(self, gravity, budget=None):
+        if np.allclose(gravity, undecided):
+            return None, "solver: Clarabel: NumericalError; HiGHS simplex: status 15"
+        return feasible(self, gravity, budget)
+
+    monkeypatch.setattr(EquilibriumSystem, "feasible", flaky)
+    scan = tilt_scan(_stack(), "x", 0.5)
+    assert scan.undecided == ((at, "solver: Clarabel: NumericalError; HiGHS simplex: status 15"),)
+    assert (at, None) in scan.angles and scan.status == status and len(scan.angles) > 6  # bisected on
+    if status == "decided":
+        assert abs(scan.angle - math.degrees(math.atan(0.5))) <= 0.1
+    else:
+        assert scan.angle == at and at - 0.1 <= scan.stable_below < at and "undecided at 20.00" in str(scan)
+    assert "critical tilt" in str(scan) and json.dumps(scan.to_dict())
+
+
+def test_a_spent_time_limit_makes_rbe_and_the_tilt_scan_inconclusive():
+    from interlock.verify.statics import tilt_scan
+
+    result = rbe(_stack(), 0.5, time_limit=1e-9)  # spent before the first solve
+    assert result.stable is None and result.message.startswith("time limit reached in")
+    scan = tilt_scan(_stack(), "x", 0.5, time_limit=1e-9)
+    assert scan.status == "inconclusive" and scan.undecided[0][1].startswith("time limit reached in")
+    assert "inconclusive" in str(scan)
