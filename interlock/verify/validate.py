@@ -312,8 +312,9 @@ def penetration(first, second) -> float:
     wrong (as on meshes whose edges are shared by four triangles, where
     manifold3d's volumes err by about 1 %) can only offer bad points, and no
     point makes touching blocks overlap; a real overlap is measured as deep
-    as the deepest sampled point.  The cost is the number of sampled points times the
-    triangles of the two meshes, in bounded chunks.
+    as the deepest sampled point.  Cost: the sampled points times the
+    triangles for the winding numbers (in chunks of :data:`DEPTH_CHUNK`),
+    and for the distances only the triangles near each point (a k-d tree).
 
     Examples
     --------
@@ -403,45 +404,80 @@ def _penetration(first, second, common) -> float:
     if not len(faces):
         return 0.0
     points = np.unique(np.einsum("sk,tkj->tsj", PENETRATION_SAMPLES, vertices[faces]).reshape(-1, 3), axis=0)
-    return float(max(0.0, (_signed_depths(first, points) + _signed_depths(second, points)).max()))
+    # measured in the unit box of the two (moved, and scaled by a power of two): no overflow at any size
+    both = np.vstack([first.vertices, second.vertices, points])
+    lo, hi = both.min(axis=0), both.max(axis=0)
+    exponent = math.frexp(float(np.max(hi / 2 - lo / 2)) or 1.0)[1]
+    centre = np.ldexp(lo / 2 + hi / 2, -exponent)
+    inside = [np.ldexp(np.asarray(m.vertices, dtype=float), -exponent)[np.asarray(m.faces)] - centre
+              for m in (first, second)]
+    points = np.ldexp(points, -exponent) - centre
+    deepest = max(0.0, float((_signed_depths(inside[0], points) + _signed_depths(inside[1], points)).max()))
+    return math.ldexp(deepest, exponent)
 
 
-def _signed_depths(mesh, points) -> np.ndarray:
-    """The distance from each point to the surface of the closed ``mesh``: positive inside, negative outside."""
-    triangles = np.asarray(mesh.triangles, dtype=float)
-    out = np.empty(len(points))
+def _signed_depths(triangles, points) -> np.ndarray:
+    """The distance from each point to the closed surface of ``triangles``: positive inside, negative outside."""
+    distance = _distances(points, triangles)
+    return np.where(_inside(points, triangles), distance, -distance)
+
+
+def _inside(points, triangles) -> np.ndarray:
+    """Whether each point is inside the closed surface: its winding number (solid angles over 4 pi) above 1/2."""
+    out = np.empty(len(points), dtype=bool)
+    corners = [triangles[:, k].T for k in range(3)]  # (3 coordinates, triangles) per corner
     step = max(1, DEPTH_CHUNK // len(triangles))
     for start in range(0, len(points), step):
-        p = points[start:start + step]
-        corners = triangles[None] - p[:, None, None]  # (points, triangles, 3 corners, 3)
-        a, b, c = corners[:, :, 0], corners[:, :, 1], corners[:, :, 2]
-        la, lb, lc = (np.linalg.norm(x, axis=2) for x in (a, b, c))
-        det = np.einsum("ptj,ptj->pt", a, np.cross(b, c))
-        below = la * lb * lc + np.einsum("ptj,ptj->pt", a, b) * lc + np.einsum("ptj,ptj->pt", b, c) * la \
-            + np.einsum("ptj,ptj->pt", c, a) * lb
-        winding = np.arctan2(det, below).sum(axis=1) / (2 * np.pi)  # the solid angles over 4 pi
-        out[start:start + step] = np.where(np.abs(winding) > 0.5, 1.0, -1.0) * _distances(p, triangles)
+        p = points[start:start + step, :, None]
+        (x0, y0, z0), (x1, y1, z1), (x2, y2, z2) = ([c[j][None] - p[:, j] for j in range(3)] for c in corners)
+        l0, l1, l2 = (np.sqrt(x * x + y * y + z * z) for x, y, z in ((x0, y0, z0), (x1, y1, z1), (x2, y2, z2)))
+        det = x0 * (y1 * z2 - z1 * y2) + y0 * (z1 * x2 - x1 * z2) + z0 * (x1 * y2 - y1 * x2)
+        below = (l0 * l1 * l2 + (x0 * x1 + y0 * y1 + z0 * z1) * l2 + (x1 * x2 + y1 * y2 + z1 * z2) * l0
+                 + (x2 * x0 + y2 * y0 + z2 * z0) * l1)
+        out[start:start + step] = np.abs(np.arctan2(det, below).sum(axis=1)) > np.pi  # |winding| > 1/2
     return out
 
 
 def _distances(points, triangles) -> np.ndarray:
-    """The distance from each point to the nearest of ``triangles``."""
+    """The distance from each point to the nearest of ``triangles``: exact, from the triangles near it.
+
+    A k-d tree on the triangles' centres gives an upper bound (the nearest few), then every triangle whose
+    centre lies within that bound plus the farthest corner from its centre.
+    """
+    import scipy.spatial
+
+    centres = triangles.mean(axis=1)
+    reach = float(np.linalg.norm(triangles - centres[:, None], axis=2).max())
+    tree = scipy.spatial.cKDTree(centres)
+    few = min(8, len(triangles))
+    near = tree.query(points, k=few)[1].reshape(len(points), few)
+    rows = np.repeat(np.arange(len(points)), few)
+    best = _point_triangle(points[rows], triangles[near.ravel()]).reshape(len(points), few).min(axis=1)
+    within = tree.query_ball_point(points, best + reach)
+    rows = np.repeat(np.arange(len(points)), [len(w) for w in within])
+    columns = np.fromiter((t for w in within for t in w), dtype=np.int64, count=len(rows))
+    for start in range(0, len(rows), DEPTH_CHUNK):
+        r, c = rows[start:start + DEPTH_CHUNK], columns[start:start + DEPTH_CHUNK]
+        np.minimum.at(best, r, _point_triangle(points[r], triangles[c]))
+    return best
+
+
+def _point_triangle(points, triangles) -> np.ndarray:
+    """The distance from each point to the matching triangle (Ericson's regions: the face, an edge or a corner)."""
     a, b, c = triangles[:, 0], triangles[:, 1], triangles[:, 2]
     normal = np.cross(b - a, c - a)
-    square = np.einsum("tj,tj->t", normal, normal)
-    d = points[:, None] - a[None]
-    over = np.einsum("ptj,tj->pt", d, normal)
+    square = np.einsum("ij,ij->i", normal, normal)
     within = square > 0
     for u, v in ((a, b), (b, c), (c, a)):
-        within = within & (np.einsum("ptj,tj->pt", np.cross(v - u, points[:, None] - u[None]), normal) >= 0)
-    best = np.where(within, over**2 / np.where(square > 0, square, 1.0), np.inf)
+        within &= np.einsum("ij,ij->i", np.cross(v - u, points - u), normal) >= 0
+    best = np.where(within, np.einsum("ij,ij->i", points - a, normal) ** 2 / np.where(within, square, 1.0), np.inf)
     for u, v in ((a, b), (b, c), (c, a)):
         edge = v - u
-        along = np.clip(np.einsum("ptj,tj->pt", points[:, None] - u[None], edge)
-                        / np.maximum(np.einsum("tj,tj->t", edge, edge), 1e-300), 0.0, 1.0)
-        gap = points[:, None] - u[None] - along[..., None] * edge[None]
-        best = np.minimum(best, np.einsum("ptj,ptj->pt", gap, gap))
-    return np.sqrt(best.min(axis=1))
+        along = np.clip(np.einsum("ij,ij->i", points - u, edge) / np.maximum(np.einsum("ij,ij->i", edge, edge), 1e-300),
+                        0.0, 1.0)
+        gap = points - u - along[:, None] * edge
+        best = np.minimum(best, np.einsum("ij,ij->i", gap, gap))
+    return np.sqrt(best)
 
 
 def _unit_box(vertices) -> np.ndarray:
