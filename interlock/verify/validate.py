@@ -34,6 +34,12 @@ LEAF_TRIANGLES = 8
 #: Candidate pairs of triangles tested at once: the self-intersection test's memory is about 1 kB per pair
 #: (the narrow phase's temporaries), so about 130 MB whatever the mesh.
 PAIR_CHUNK = 1 << 17
+#: Where :func:`penetration` looks on each triangle of the common solid (barycentric weights): the corners,
+#: the centre, and halfway from the centre to each corner.
+PENETRATION_SAMPLES = np.array([[1, 0, 0], [0, 1, 0], [0, 0, 1], [1 / 3, 1 / 3, 1 / 3],
+                                [2 / 3, 1 / 6, 1 / 6], [1 / 6, 2 / 3, 1 / 6], [1 / 6, 1 / 6, 2 / 3]])
+#: Points times triangles measured at once by :func:`penetration` (about 0.5 kB each: ~30 MB).
+DEPTH_CHUNK = 1 << 16
 
 
 class OverlapError(InterlockError):
@@ -379,23 +385,13 @@ def _measured(assembly: Assembly, found, rtol, allowed) -> list[Overlap]:
     for r in first:
         i, j = pairs[r]
         mine, other = assembly.meshes[assembly.types[i]], assembly.meshes[assembly.types[j]].copy()
-        other.apply_transform(relative[r])
-        if np.linalg.det(relative[r][:3, :3]) < 0:
-            other.invert()
+        other.apply_transform(relative[r])  # trimesh keeps a mirrored mesh's winding outward
         common = manifold_solid(manifold3d, mine, i) ^ manifold_solid(manifold3d, other, j)
         depths.append(_penetration(mine, other, common))
     out = list(found)
     for k, kind in zip(doubtful, kind_of):
         out[k] = dataclasses.replace(found[k], depth=depths[kind])
     return out
-
-
-#: Where :func:`penetration` looks on each triangle of the common solid (barycentric weights): the corners,
-#: the centre, and halfway from the centre to each corner.
-PENETRATION_SAMPLES = np.array([[1, 0, 0], [0, 1, 0], [0, 0, 1], [1 / 3, 1 / 3, 1 / 3],
-                                [2 / 3, 1 / 6, 1 / 6], [1 / 6, 2 / 3, 1 / 6], [1 / 6, 1 / 6, 2 / 3]])
-#: Points times triangles measured at once by :func:`penetration` (about 0.5 kB each: ~30 MB).
-DEPTH_CHUNK = 1 << 16
 
 
 def _penetration(first, second, common) -> float:

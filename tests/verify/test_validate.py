@@ -204,3 +204,16 @@ def test_depth_must_be_a_length_or_one_per_block():
         with pytest.raises(OverlapError, match=r"depth must be a finite length >= 0, or one per block \(2 of them\)"):
             module.validate(boxes, depth=bad)
     assert module.validate(boxes, depth=[0.0, 1e-9]) == []
+
+
+@pytest.mark.parametrize("offset", [0.0, 1e-3])
+def test_a_mirrored_neighbour_is_measured_in_its_own_frame(offset):
+    # block 1 is block 0 mirrored about the plane x = 1 - offset / 2: it reaches offset into block 0
+    mirror = np.diag([-1.0, 1.0, 1.0, 1.0])
+    mirror[0, 3] = 2.0 - offset
+    pair = Assembly([trimesh.creation.box(bounds=[[0, 0, 0], [1, 1, 1]])], [0, 0], [np.eye(4), mirror])
+    found = module.validate(pair, depth=2e-3)
+    assert [o.depth for o in found if o.depth is not None] == ([pytest.approx(offset, abs=1e-12)] if offset else [])
+    if offset:
+        with pytest.raises(OverlapError, match="reaches 0.001 inside the other"):
+            module.validate(pair, depth=5e-4)
