@@ -63,6 +63,11 @@ class Overlap:
     thickness: float
     depth: float | None = None
 
+    @property
+    def deepness(self) -> float:
+        """How deep the two blocks reach into each other: ``depth`` when measured, else ``thickness``."""
+        return self.thickness if self.depth is None else self.depth
+
 
 def pair_overlaps(assembly: Assembly) -> list[Overlap]:
     """Every pair of neighbouring blocks with a common volume, however small.
@@ -119,7 +124,7 @@ def overlaps_without_contact(found, contacts, distance: float) -> list[Overlap]:
     block, and a wrong "not interlocked" before this check).
     """
     touching = {(min(c.i, c.j), max(c.i, c.j)) for c in contacts}
-    return [o for o in found if _deepness(o) > distance and (min(o.i, o.j), max(o.i, o.j)) not in touching]
+    return [o for o in found if o.deepness > distance and (min(o.i, o.j), max(o.i, o.j)) not in touching]
 
 
 def self_intersections(mesh, rtol: float = CROSSING_RTOL) -> np.ndarray:
@@ -217,11 +222,14 @@ def validate(assembly: Assembly, rtol: float = OVERLAP_RTOL, depth=None) -> list
         pair may reach the sum of its two blocks' (each surface may lie its
         own length from where it should).  Every pair whose common volume
         exceeds ``rtol`` or whose mean depth (``Overlap.thickness``) exceeds
-        its length is then measured by :func:`penetration`, and refused when
-        that is deeper than its length, whatever the volume: a block
-        re-triangulated without moving its faces (where the boolean is wrong)
-        touches its neighbours; a block grown by 2e-4 into them overlaps.
-        None (the default): the volume alone decides.
+        its length is then measured by :func:`penetration`, and a volume
+        above ``rtol`` is refused only when that depth exceeds the length: a
+        block re-triangulated without moving its faces (where the boolean is
+        wrong) touches its neighbours; a block moved 1e-3 into one overlaps.
+        Smaller volumes pass, with their measured depth, for
+        :func:`refuse_overlaps_without_contact` to judge once the contacts
+        are known (a block grown by 2e-4 into its neighbours).  None (the
+        default): the volume alone decides.
 
     Returns
     -------
@@ -267,7 +275,8 @@ def validate(assembly: Assembly, rtol: float = OVERLAP_RTOL, depth=None) -> list
     every = pair_overlaps(assembly)
     if allowed is not None:
         every = _measured(assembly, every, rtol, allowed)
-        deep = [o for o in every if o.depth is not None and o.depth > allowed(o.i, o.j)]
+        deep = [o for o in every if o.depth is not None and o.depth > allowed(o.i, o.j)
+                and o.volume > rtol * min(assembly.volumes[o.i], assembly.volumes[o.j])]
         if deep:
             o = max(deep, key=lambda item: item.depth / allowed(item.i, item.j))
             more = f" ({len(deep) - 1} more overlapping pairs)" if len(deep) > 1 else ""
@@ -342,19 +351,14 @@ def refuse_overlaps_without_contact(assembly: Assembly, found, contacts, distanc
     """Raise :class:`OverlapError` for the deepest of :func:`overlaps_without_contact`, if any."""
     loose = overlaps_without_contact(found, contacts, distance)
     if loose:
-        o = max(loose, key=_deepness)
+        o = max(loose, key=lambda item: item.deepness)
         more = f" ({len(loose) - 1} more such pairs)" if len(loose) > 1 else ""
         raise OverlapError(
-            f"blocks {o.i} ({assembly.labels[o.i]}) and {o.j} ({assembly.labels[o.j]}) overlap {_deepness(o):.3g} deep "
+            f"blocks {o.i} ({assembly.labels[o.i]}) and {o.j} ({assembly.labels[o.j]}) overlap {o.deepness:.3g} deep "
             f"(a volume of {o.volume:.3g}) without a face of one lying on a face of the other: deeper than the "
             f"contact tolerance {distance:.3g}, so they are neither apart nor touching{more}; move them apart or "
             "onto each other's faces"
         )
-
-
-def _deepness(overlap: Overlap) -> float:
-    """The depth of an overlap: measured (:func:`penetration`) when it was, else the boolean's mean depth."""
-    return overlap.thickness if overlap.depth is None else overlap.depth
 
 
 def _allowances(assembly: Assembly, depth):

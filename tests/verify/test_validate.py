@@ -165,23 +165,31 @@ def test_a_retriangulated_bunny_touches_within_the_input_precision(bunny, tmp_pa
         assert all(o.depth <= 1e-9 * copy.scale for o in found if o.depth is not None)
 
 
-@pytest.mark.parametrize("change", ["grown", "shifted"])
-def test_a_real_overlap_is_refused_within_the_input_precision(bunny, change):
+def test_a_real_overlap_is_refused_within_the_input_precision(bunny):
     meshes = [bunny.mesh(i) for i in range(len(bunny))]
-    block = meshes[10]
-    if change == "grown":  # 2e-4 of the part's size: a common volume far below the volume rule
-        centre = block.centroid.copy()
-        block.apply_translation(-centre).apply_scale(1.0002).apply_translation(centre)
-    else:  # 1e-3 into a neighbour
-        neighbour = min(bunny.neighbours[10])
-        towards = bunny.centroids[neighbour] - bunny.centroids[10]
-        block.apply_translation(1e-3 * towards / np.linalg.norm(towards))
+    neighbour = min(bunny.neighbours[10])
+    towards = bunny.centroids[neighbour] - bunny.centroids[10]
+    meshes[10].apply_translation(1e-3 * towards / np.linalg.norm(towards))  # 1e-3 into a neighbour
     moved = Assembly.from_meshes(meshes)
     with pytest.raises(OverlapError, match=r"overlap: the surface of one reaches .* inside the other .* deeper than "
                                            r"the tolerance"):
         module.validate(moved, depth=1e-9 * moved.scale)
     with pytest.raises(OverlapError, match=r"deeper than the tolerance"):  # one length per block
         module.validate(moved, depth=np.full(len(moved), 1e-9 * moved.scale))
+
+
+def test_a_block_grown_below_the_volume_rule_passes_with_its_measured_depth(bunny):
+    # 2e-4 of the part's size: a common volume far below the volume rule, left to the contacts to judge
+    # (refuse_overlaps_without_contact), now with the depth measured rather than the boolean's mean depth
+    meshes = [bunny.mesh(i) for i in range(len(bunny))]
+    centre = meshes[10].centroid.copy()
+    meshes[10].apply_translation(-centre).apply_scale(1.0002).apply_translation(centre)
+    grown = Assembly.from_meshes(meshes)
+    found = module.validate(grown, depth=1e-9 * grown.scale)
+    deepest = max((o for o in found if 10 in (o.i, o.j)), key=lambda o: o.deepness)
+    assert deepest.depth is not None and deepest.depth > 1e-5
+    with pytest.raises(OverlapError, match="without a face of one lying on a face of the other"):
+        module.refuse_overlaps_without_contact(grown, found, [], 1e-9 * grown.scale)
 
 
 @settings(max_examples=25)
