@@ -21,7 +21,7 @@ from interlock.errors import InterlockError
 from interlock.verify.admissible import (MOVING_RTOL, bent_contacts, moving_names, rigid_across_bends, unless_bent,
                                          unless_missed)
 from interlock.verify.budget import Budget, TimeLimitReached
-from interlock.verify.contacts import Contact, contacts as find_contacts, model_contacts, search_distances
+from interlock.verify.contacts import PRESS_RTOL, Contact, contacts as find_contacts, model_contacts, search_distances
 from interlock.verify.margin import Margin, assess, margin_lower_bound
 from interlock.verify.precision import Precision, block_precision
 from interlock.verify.matrix import InterlockingMatrix, interlocking_matrix
@@ -272,16 +272,21 @@ def _check_arguments(assembly, lp_solver, order, rank_rtol, lp_tol, tolerance, c
 def _decide(assembly, frame, translational, certify, rank_rtol, lp_tol, contacts, validate, progress, lp_solver,
             order, tolerance, budget, timings) -> Verdict:
     """The body of :func:`check` after its arguments were checked; raises TimeLimitReached when ``budget`` is spent."""
+    precision = block_precision(assembly)
+    distance = search_distances(assembly, precision)
     if validate:
         with _stage(timings, "validate", progress, budget):
             shallow = check_overlaps(assembly)
     with _stage(timings, "contacts", progress, budget):
-        precision = block_precision(assembly)
         found = model_contacts(assembly, contacts, precision)
-        if validate:  # overlaps that pass the volume rule must still be touches, within the pair's own tolerance
-            distance = search_distances(assembly, precision)
-            deep = [o for o in shallow if o.thickness > max(distance[o.i], distance[o.j])]
-            widest = max((max(distance[o.i], distance[o.j]) for o in deep), default=0.0)
+        if validate:  # overlaps that pass the volume rule must still be touches, within each block's own tolerance
+            # at least what the search accepts as faces pressed together (PRESS_RTOL of the block): a boolean's
+            # sliver along an edge touch says nothing about depth below that
+            distance = np.maximum(distance, PRESS_RTOL * assembly.block_sizes)
+            for c in found:  # a block whose faces show noise or bends is as uncertain as they are
+                distance[[c.i, c.j]] = np.maximum(distance[[c.i, c.j]], c.tolerance or 0.0)
+            deep = [o for o in shallow if o.thickness > distance[o.i] + distance[o.j]]
+            widest = max((distance[o.i] + distance[o.j] for o in deep), default=0.0)
             refuse_overlaps_without_contact(assembly, deep, found, float(widest))
     with _stage(timings, "matrix", progress, budget):
         A = interlocking_matrix(assembly, frame, translational, contacts=found)
@@ -354,8 +359,8 @@ def _decide(assembly, frame, translational, certify, rank_rtol, lp_tol, contacts
     if verdict.interlocked is True:
         with _stage(timings, "margin", progress, budget):
             source = "given" if tolerance is not None else _tolerance_source(found, A, precision)
-            verdict = _with_margin(verdict, assess(A, found, assembly.block_size, stress, *_margin_tolerance(
-                found, A, limits, source)), A, len(assembly))
+            verdict = _with_margin(verdict, assess(A, found, assembly.block_size, stress, limits, source,
+                                                   per_contact=True), A, len(assembly))
             verdict = _with_play(verdict, A, found, stress)
     if certify:
         from interlock.verify.certify import certify_verdict
@@ -461,16 +466,8 @@ def _tolerance_source(found, A: InterlockingMatrix, precision: Precision) -> str
     free = set(A.free.tolist())
     moving = [c for c in found if c.i in free or c.j in free]
     source = precision.describe(sorted({b for c in moving for b in (c.i, c.j)}))
-    bends = [c.deviation for c in moving if not c.planar]
+    bends = [c.deviation for c in moving if not c.planar and c.deviation > precision.contact_tolerance(c.i, c.j)]
     return source + (f"; faces bent by up to {max(bends):.2g}" if bends else "")
-
-
-def _margin_tolerance(found, A: InterlockingMatrix, limits: np.ndarray, source: str):
-    """``(tolerance, source)`` for :func:`~interlock.verify.margin.assess`: the largest tolerance of a contact
-    of a free block (a contact between fixed blocks gives no row)."""
-    free = set(A.free.tolist())
-    mine = [t for c, t in zip(found, limits) if c.i in free or c.j in free]
-    return float(max(mine, default=0.0)), source
 
 
 def _with_play(verdict: Verdict, A: InterlockingMatrix, found, stress) -> Verdict:

@@ -376,3 +376,62 @@ def test_separate_blocks_need_no_dense_kernel():
     cubes = [trimesh.creation.box(bounds=[[2 * x, 0, 0], [2 * x + 1, 1, 1]]) for x in range(300)]
     v = check(Assembly.from_meshes(cubes), frame=[0], validate=False)
     assert v.interlocked is False and v.shape == (0, 6 * 299) and "kernel dimension at least" in v.status
+
+
+# --- verdicts that follow the contact, not the scene ----------------------------------------------------
+
+
+def _caged_cube(gap=0.0, far=None):
+    """A unit cube enclosed by six fixed unit cubes ``gap`` away (block 0 is the cube), and a fixed cube ``far``
+    away that touches nothing."""
+    boxes = [trimesh.creation.box(bounds=[[0, 0, 0], [1, 1, 1]])]
+    for axis in range(3):
+        for side in (-1, 1):
+            low = np.zeros(3)
+            low[axis] = side * (1 + gap)
+            boxes.append(trimesh.creation.box(bounds=[low, low + 1]))
+    if far is not None:
+        boxes.append(trimesh.creation.box(bounds=[[far, 0, 0], [far + 1, 1, 1]]))
+    return Assembly.from_meshes(boxes, frame=list(range(1, len(boxes))))
+
+
+def _cage_of_tilted_cubes():
+    """Ex. 3.6's tilted cubes: interlocked, face contacts only."""
+    return presets.interlocking_cubes()
+
+
+@pytest.mark.parametrize("far", [None, 1e2, 1e5, 1e9])
+def test_a_far_fixed_block_changes_no_verdict(far):
+    cage = _caged_cube(far=far)
+    v = check(cage, certify=True)
+    assert v.interlocked is True and v.certified and v.contacts == 6
+    assert check(_caged_cube(gap=1e-4, far=far)).interlocked is False  # a gap wider than the tolerance is open
+    assert check(_caged_cube(gap=1e-6, far=far)).interlocked is False
+
+
+def test_a_gap_within_the_tolerance_is_a_contact_with_play():
+    # written as float32 (as STL does): a gap of one float32 step at 1.0 is within the rounding of the faces
+    step = float(np.spacing(np.float32(1.0)))
+    cage = _caged_cube(gap=step)
+    meshes = [m.copy() for m in cage.world_meshes()]
+    for m in meshes:
+        m.vertices = np.float32(m.vertices).astype(float)
+    v = check(Assembly.from_meshes(meshes, frame=list(cage.frame)))
+    assert v.interlocked is True and "play at most" in v.status
+    assert 0 < v.tolerances["play"] < 1e-5 and v.tolerances["widest_gap"] == pytest.approx(step, rel=1e-6)
+    assert "bent" not in v.status  # a gap is never a bent face
+
+
+@settings(max_examples=10)
+@given(distance=st.floats(1e1, 1e9), direction=st.sampled_from([(1, 0, 0), (0, 1, 0), (1, 1, 1)]),
+       shift=st.floats(-1e6, 1e6), which=st.sampled_from(["cage", "tilted", "grid"]))
+def test_far_blocks_and_translations_never_change_a_verdict(distance, direction, shift, which):
+    base = {"cage": _caged_cube(), "tilted": presets.interlocking_cubes(), "grid": presets.cube_grid()}[which]
+    meshes = base.world_meshes()
+    far = trimesh.creation.box(bounds=[[0, 0, 0], [1, 1, 1]])
+    far.apply_translation(np.asarray(direction, dtype=float) / np.linalg.norm(direction) * distance + 5.0)
+    frame = list(base.frame)
+    expected = check(base).interlocked
+    assert check(Assembly.from_meshes(meshes + [far], frame=frame + [len(meshes)])).interlocked is expected
+    moved = [m.copy().apply_translation([shift, -shift / 3, 2 * shift]) for m in meshes]
+    assert check(Assembly.from_meshes(moved, frame=frame)).interlocked is expected
