@@ -435,3 +435,16 @@ def test_far_blocks_and_translations_never_change_a_verdict(distance, direction,
     assert check(Assembly.from_meshes(meshes + [far], frame=frame + [len(meshes)])).interlocked is expected
     moved = [m.copy().apply_translation([shift, -shift / 3, 2 * shift]) for m in meshes]
     assert check(Assembly.from_meshes(moved, frame=frame)).interlocked is expected
+
+
+@pytest.mark.parametrize("n", [10, 20])
+def test_generated_hexagon_written_as_stl_is_decided_interlocked(tmp_path, n, capsys):
+    """`interlock generate rhomblock --hexagon n n n -o x.stl`, then `interlock verify x.stl`: float32, decided."""
+    from interlock.cli import main
+
+    path = tmp_path / "hexagon.stl"
+    assert main(["generate", "rhomblock", "--hexagon", str(n), str(n), str(n), "--seed", "1", "-o", str(path)]) == 0
+    assembly = Assembly.load(path)
+    v = check(assembly)
+    assert v.interlocked is True and v.margin is not None and v.margin.lower > 1
+    assert "float32 input" in v.tolerances["tolerance_from"]
