@@ -155,7 +155,12 @@ def self_intersections(mesh, rtol: float = CROSSING_RTOL) -> np.ndarray:
     against itself.  Each node keeps the vertices that all its triangles share,
     so two nodes whose triangles all meet at one vertex (a fan of long
     triangles around a cap's centre) are skipped whole: their pairs share a
-    vertex and never count.  Node pairs are expanded at most
+    vertex and never count; and its plane, when all its triangles lie in one
+    (within :data:`SEPARATED_RTOL`), so it is skipped against a node whose
+    box lies on one side of that plane (a cap of slivers against the sides
+    it stands on; the tree is built in the mesh's principal axes, where such
+    caps lie across an axis).  Such a pair could only cross by less than
+    :data:`SEPARATED_RTOL`, far below :data:`CROSSING_RTOL`.  Node pairs are expanded at most
     :data:`PAIR_CHUNK` at a time, so memory stays bounded whatever the mesh.
     Narrow phase: every edge of one triangle against the other
     (Moller-Trumbore), counted only when it passes strictly inside both, so
@@ -188,12 +193,14 @@ def self_intersections(mesh, rtol: float = CROSSING_RTOL) -> np.ndarray:
     triangles = vertices[faces]
     size = float(np.linalg.norm(vertices.max(axis=0) - vertices.min(axis=0))) or 1.0
     atol = rtol * size
-    lo, hi = triangles.min(axis=1), triangles.max(axis=1)
     normal = np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0])
     offset = np.einsum("ij,ij->i", normal, triangles[:, 0])
     slack = SEPARATED_RTOL * size * np.linalg.norm(normal, axis=1)
+    # the tree in the mesh's principal axes, where a prism's or a cylinder's caps lie across an axis
+    centred = vertices - vertices.mean(axis=0)
+    axes = np.linalg.svd(centred, full_matrices=False)[2] if len(vertices) > 2 else np.eye(3)
     found = [np.empty((0, 2), dtype=np.int64)]
-    for a, b in _candidate_pairs(faces, lo, hi):
+    for a, b in _candidate_pairs(faces, (centred @ axes.T)[faces], SEPARATED_RTOL * size):
         # a triangle wholly on one side of the other's plane crosses nothing of it, nor the other way round
         side_b = np.einsum("kij,kj->ki", triangles[b], normal[a]) - offset[a][:, None]
         side_a = np.einsum("kij,kj->ki", triangles[a], normal[b]) - offset[b][:, None]
@@ -503,14 +510,17 @@ def _morton(points) -> np.ndarray:
     return code
 
 
-def _candidate_pairs(faces, lo, hi):
-    """Chunks ``(a, b)`` of pairs of triangles whose boxes ``lo``, ``hi`` overlap and which share no vertex.
+def _candidate_pairs(faces, triangles, slack):
+    """Chunks ``(a, b)`` of pairs of triangles whose boxes overlap and which share no vertex.
 
     A complete binary tree over the triangles in Morton order (node ``k``'s children are ``2k``, ``2k + 1``;
     the leaves, :data:`LEAF_TRIANGLES` slots each, are ``leaves ... 2 leaves - 1``), traversed against itself
-    level by level; node pairs whose boxes are apart, or whose triangles all share a vertex, are dropped.
+    level by level.  Node pairs are dropped when their boxes are apart, when their triangles all share a
+    vertex, or when one node's triangles lie in one plane (within ``slack``) and the other's box on one side
+    of it (the caps of a prism against its sides).
     """
     n, width = len(faces), LEAF_TRIANGLES
+    lo, hi = triangles.min(axis=1), triangles.max(axis=1)
     leaves = 1 << max(0, math.ceil(math.log2(-(-n // width))))
     order = np.full(leaves * width, -1, dtype=np.int64)
     order[:n] = np.argsort(_morton((lo + hi) / 2), kind="stable")
@@ -524,6 +534,7 @@ def _candidate_pairs(faces, lo, hi):
     box_hi[leaves:] = slot_hi.max(axis=1)
     count = np.zeros(2 * leaves, dtype=np.int64)
     count[leaves:] = real.sum(axis=1)
+    plane, flat = _node_planes(triangles, order, slack)
     # the vertices every triangle of a node has (-1: none): those of the leaf's first triangle, then intersected
     corners = faces[slots]
     first = corners[:, 0, :]
@@ -553,6 +564,10 @@ def _candidate_pairs(faces, lo, hi):
         apart = np.any((box_lo[a] > box_hi[b]) | (box_lo[b] > box_hi[a]), axis=1)
         fan = ((common[a][:, :, None] == common[b][:, None, :]) & (common[a] >= 0)[:, :, None]).any(axis=(1, 2))
         keep = np.where(same, count[a] > 1, ~apart & ~fan)
+        other = keep & ~same
+        other[other] = ~(_beside(plane, flat, box_lo, box_hi, a[other], b[other], slack)
+                         | _beside(plane, flat, box_lo, box_hi, b[other], a[other], slack))
+        keep &= same | other
         a, b, same = a[keep], b[keep], same[keep]
         if not len(a):
             continue
@@ -569,6 +584,41 @@ def _candidate_pairs(faces, lo, hi):
         ok = ~(faces[p][:, :, None] == faces[q][:, None, :]).any(axis=(1, 2))
         if ok.any():
             yield p[ok], q[ok]
+
+
+def _node_planes(triangles, order, slack):
+    """Per node of the tree over ``order`` (the heap numbering of :func:`_candidate_pairs`): the unit normal and
+    offset of the plane of its first triangle, and whether all its triangles lie within ``slack`` of it."""
+    normal = np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0])
+    length = np.linalg.norm(normal, axis=1)
+    unit = normal / np.where(length > 0, length, 1.0)[:, None]
+    nodes = 2 * (len(order) // LEAF_TRIANGLES)
+    plane = np.zeros((nodes, 4))
+    flat = np.zeros(nodes, dtype=bool)
+    count, span = nodes // 2, LEAF_TRIANGLES
+    while count:
+        members = order.reshape(count, span)
+        head = members[:, 0]
+        u = unit[head]
+        d = np.einsum("ij,ij->i", u, triangles[head, 0])
+        points = triangles[members]  # (nodes, span, 3 corners, 3)
+        off = np.abs(np.einsum("nscj,nj->nsc", points, u) - d[:, None, None]).max(axis=2)
+        ids = np.arange(count, 2 * count)
+        plane[ids, :3], plane[ids, 3] = u, d
+        flat[ids] = (head >= 0) & (length[head] > 0) & np.where(members >= 0, off <= slack, True).all(axis=1)
+        count, span = count // 2, span * 2
+    return plane, flat
+
+
+def _beside(plane, flat, box_lo, box_hi, a, b, slack) -> np.ndarray:
+    """Whether node ``a``'s triangles lie in one plane and node ``b``'s box on one side of it (``slack`` over)."""
+    out = flat[a].copy()
+    a, b = a[out], b[out]
+    centre = (box_lo[b] + box_hi[b]) / 2
+    reach = np.einsum("ij,ij->i", np.abs(plane[a, :3]), (box_hi[b] - box_lo[b]) / 2)
+    middle = np.einsum("ij,ij->i", plane[a, :3], centre) - plane[a, 3]
+    out[out] = (middle - reach >= -slack) | (middle + reach <= slack)
+    return out
 
 
 def _edges_cross(edges_of, triangles, atol) -> np.ndarray:

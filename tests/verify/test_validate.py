@@ -87,6 +87,38 @@ def test_long_triangles_are_checked_in_bounded_memory(tmp_path, n):
     assert peak < 300e6, f"validate of a {n}-gon prism peaked at {peak / 1e6:.0f} MB"
 
 
+def _fan_prism(n):
+    """An n-gon prism whose caps are fans from one corner (as CAD exports triangulate them): long slivers."""
+    t = 2 * np.pi * np.arange(n) / n
+    ring = np.column_stack([np.cos(t), np.sin(t)])
+    vertices = np.vstack([np.column_stack([ring, np.zeros(n)]), np.column_stack([ring, np.ones(n)])])
+    k = np.arange(1, n - 1)
+    i, j = np.arange(n), (np.arange(n) + 1) % n
+    faces = np.vstack([np.column_stack([np.zeros(n - 2, dtype=int), k + 1, k]), np.column_stack([np.full(n - 2, n), n + k, n + k + 1]),
+                       np.column_stack([i, j, n + j]), np.column_stack([i, n + j, n + i])])
+    return trimesh.Trimesh(vertices, faces, process=False)
+
+
+@pytest.mark.parametrize("turned", [False, True])
+def test_caps_of_long_slivers_are_not_paired_with_every_side(monkeypatch, turned):
+    # each sliver's box holds a whole arc of the sides: a box test pairs them quadratically (a 20,000-gon took
+    # 144 s); nodes lying in one plane are dropped against boxes on one side of it, in the principal axes
+    prism = _fan_prism(1000)
+    if turned:
+        prism.apply_transform(trimesh.transformations.random_rotation_matrix(np.random.default_rng(0).random(3)))
+    paired = []
+    candidates = module._candidate_pairs
+
+    def counted(*args):
+        for a, b in candidates(*args):
+            paired.append(len(a))
+            yield a, b
+
+    monkeypatch.setattr(module, "_candidate_pairs", counted)
+    assert len(self_intersections(prism)) == 0 and prism.is_volume
+    assert sum(paired) < 10 * len(prism.faces)
+
+
 def test_huge_coordinates_are_refused_with_a_clear_error():
     # issue 40: coordinates of 1e200 made cKDTree.query_pairs raise a bare ValueError about "p too large"
     boxes = [trimesh.creation.box(bounds=[[x, 0, 0], [x + 1, 1, 1]]) for x in (0, 1)]
