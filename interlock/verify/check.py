@@ -276,7 +276,9 @@ def _decide(assembly, frame, translational, certify, rank_rtol, lp_tol, contacts
     distance = search_distances(assembly, precision)
     if validate:
         with _stage(timings, "validate", progress, budget):
-            shallow = check_overlaps(assembly)
+            # a re-meshed block whose faces lie where they were may not overlap by a boolean's volume alone: its
+            # measured depth must pass what the contacts accept as pressed faces (PRESS_RTOL of the block)
+            shallow = check_overlaps(assembly, depth=np.maximum(distance, PRESS_RTOL * assembly.block_sizes))
     with _stage(timings, "contacts", progress, budget):
         found = model_contacts(assembly, contacts, precision)
         if validate:  # overlaps that pass the volume rule must still be touches, within each block's own tolerance
@@ -285,7 +287,7 @@ def _decide(assembly, frame, translational, certify, rank_rtol, lp_tol, contacts
             distance = np.maximum(distance, PRESS_RTOL * assembly.block_sizes)
             for c in found:  # a block whose faces show noise or bends is as uncertain as they are
                 distance[[c.i, c.j]] = np.maximum(distance[[c.i, c.j]], c.tolerance or 0.0)
-            deep = [o for o in shallow if o.thickness > distance[o.i] + distance[o.j]]
+            deep = [o for o in shallow if o.deepness > distance[o.i] + distance[o.j]]
             widest = max((distance[o.i] + distance[o.j] for o in deep), default=0.0)
             refuse_overlaps_without_contact(assembly, deep, found, float(widest))
     with _stage(timings, "matrix", progress, budget):

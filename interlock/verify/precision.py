@@ -119,14 +119,13 @@ def coordinate_precision(values) -> tuple[float, str]:
         quantum = 10.0 ** (exponent - digits + 1)
         if _cut_to(x, quantum) is not None and np.mean(_cut_to(x, quantum) % 10 != 0) >= DECIMAL_FULL_SHARE:
             return 0.5 * quantum, f"decimals {quantum:.0e}"
-    if len(nonzero):
-        exponents = np.floor(np.log10(np.abs(nonzero)))
-        for digits in range(DECIMAL_MIN_DIGITS, 16):  # k significant digits: each number its own quantum
-            quanta = 10.0 ** (exponents - digits + 1)
-            units = nonzero / quanta
-            if np.all(np.abs(units - np.round(units)) <= 1e-6) and np.mean(np.round(units) % 10 != 0) >= \
-                    DECIMAL_FULL_SHARE:
-                return 0.5 * 10.0 ** (exponent - digits + 1), f"{digits} significant digits"
+    exponents = np.floor(np.log10(np.abs(nonzero)))
+    for digits in range(DECIMAL_MIN_DIGITS, 16):  # k significant digits: each number its own quantum
+        with np.errstate(all="ignore"):  # quanta below the smallest float64 are no rounding anyone wrote
+            units = nonzero / 10.0 ** (exponents - digits + 1)
+        if (np.all(np.isfinite(units)) and np.all(np.abs(units - np.round(units)) <= 1e-6)
+                and np.mean(np.round(units) % 10 != 0) >= DECIMAL_FULL_SHARE):
+            return 0.5 * 10.0 ** (exponent - digits + 1), f"{digits} significant digits"
     return top * _EPS64, "float64"
 
 
@@ -167,8 +166,9 @@ def block_precision(assembly) -> Precision:
 
 def _cut_to(x: np.ndarray, quantum: float):
     """The numbers as integer multiples of ``quantum`` if they all are (within float64 noise), else None."""
-    units = x / quantum
+    with np.errstate(all="ignore"):
+        units = x / quantum
     rounded = np.round(units)
-    if np.all(np.abs(units - rounded) <= 1e-6) and np.abs(rounded).max(initial=0.0) < 2.0**52:
+    if np.all(np.isfinite(units)) and np.all(np.abs(units - rounded) <= 1e-6) and np.abs(rounded).max(initial=0.0) < 2.0**52:
         return rounded
     return None
