@@ -448,3 +448,18 @@ def test_generated_hexagon_written_as_stl_is_decided_interlocked(tmp_path, n, ca
     v = check(assembly)
     assert v.interlocked is True and v.margin is not None and v.margin.lower > 1
     assert "float32 input" in v.tolerances["tolerance_from"]
+
+
+def test_a_file_coarser_than_its_contacts_is_inconclusive_saying_so(bunny):
+    """The bunny written with 4 significant digits: parts 0.06 across, faces bent by the rounding by 0.0036."""
+    rotation = trimesh.transformations.random_rotation_matrix(np.random.default_rng(0).random(3))
+    rotation[:3, 3] = [3.7, -12.1, 5.3]
+    rounded = []
+    for mesh in bunny[0].world_meshes():
+        moved = mesh.copy().apply_transform(rotation)
+        vertices = np.array([[float("%.4g" % x) for x in v] for v in moved.vertices])
+        rounded.append(trimesh.Trimesh(vertices, moved.faces, process=False))
+    coarse = Assembly.from_meshes(rounded)
+    for frame in ([0], [0, 1]):
+        v = check(coarse, frame=frame, certify=True)
+        assert v.interlocked is None and "is coarser than its blocks' contacts" in v.status and not v.certified
