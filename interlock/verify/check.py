@@ -487,7 +487,9 @@ def _with_play(verdict: Verdict, A: InterlockingMatrix, found, stress) -> Verdic
     gaps = np.array([c.separation for c in found], dtype=float)
     if verdict.interlocked is not True or stress is None or not len(A.row_contact) or not gaps[A.row_contact].any():
         return verdict
-    rho = margin_lower_bound(A.matrix, gaps[A.row_contact], stress)
+    row_gaps = gaps[A.row_contact]
+    # rows without a gap may not open at all: a floor far below the gaps keeps the bound's tolerances positive
+    rho = margin_lower_bound(A.matrix, np.maximum(row_gaps, 1e-9 * row_gaps.max()), stress)
     play = A.length_scale / rho if rho > 0 else math.inf
     widest = float(gaps[A.row_contact].max())
     return dataclasses.replace(verdict, status=f"{verdict.status}; play at most {play:.3g}: the largest motion the "
