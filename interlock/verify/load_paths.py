@@ -69,7 +69,7 @@ import scipy.sparse.linalg
 from interlock.errors import InterlockError
 
 __all__ = ["LoadPathBound", "LoadPathError", "load_path_bound", "LOAD_PATH_PASSES", "LOAD_PATH_PIVOTS",
-           "LOAD_PATH_SAFETY", "LOAD_PATH_PERTURBATION", "LOAD_PATH_SLACK", "LOAD_PATH_EVALUATION_STEPS",
+           "LOAD_PATH_UNIT_PIVOTS", "LOAD_PATH_SAFETY", "LOAD_PATH_PERTURBATION", "LOAD_PATH_SLACK", "LOAD_PATH_EVALUATION_STEPS",
            "LOAD_PATH_BATCH", "LOAD_PATH_IMPROVEMENTS", "LOAD_PATH_FIRST_TRY", "LOAD_PATH_STALL"]
 
 #: Gauss-Seidel passes at most before a policy must have proved (outside in, inside out, ...).  RhomBlock
@@ -78,6 +78,9 @@ LOAD_PATH_PASSES = 12
 #: Simplex pivots per local LP at most; a 6-row LP with about 40 columns needs 6 to 45 from the slacks
 #: (measured on hexagons), 0 to 5 warm.  Stopping early keeps a feasible local solution.
 LOAD_PATH_PIVOTS = 120
+#: ... and per unit load (``+-e_k``), which always starts from the slacks: at n = 40 a third of the unit loads
+#: above 1 after 120 pivots were below it after 400.
+LOAD_PATH_UNIT_PIVOTS = 400
 #: Every computed value is multiplied by ``1 + LOAD_PATH_SAFETY``: far above the rounding of 6 x 6 solves
 #: with condition numbers up to ~1e6 (``1e6 * 2^-52`` ~ 2e-10 per step, summed over at most thousands of steps).
 LOAD_PATH_SAFETY = 1e-6
@@ -90,7 +93,7 @@ LOAD_PATH_EVALUATION_STEPS = 1500
 #: Blocks whose local LPs are solved in one batch by the Jacobi passes (memory: about 100 kB per block).
 LOAD_PATH_BATCH = 500
 #: Policy-iteration steps at most (each: a pass of the unit loads, then of the incidences, and an evaluation).
-LOAD_PATH_IMPROVEMENTS = 3
+LOAD_PATH_IMPROVEMENTS = 8
 #: The first pass after which the local solutions are evaluated (tried as certificates); earlier ones rarely are.
 LOAD_PATH_FIRST_TRY = 2
 #: Policy iteration stops once a step improves the bound by less than this share.
@@ -188,13 +191,12 @@ def load_path_bound(A, eps, block_size: int = 6, *, start: float | None = None, 
         policy, count = paths.sweep(paths.layers if done % 2 else paths.layers[::-1], pivots)
         total += count
         if done >= LOAD_PATH_FIRST_TRY:
-            kept = paths.gamma.copy()
-            proper = paths.evaluate(policy)
+            proper = paths.evaluate(policy)  # if not, the values are pushed up along the policy
             if proper:
                 break
-            paths.gamma = kept
     for _ in range(LOAD_PATH_IMPROVEMENTS if proper else 0):  # policy iteration: improve, evaluate again
-        _, count = paths.policy(pivots, units=True, incidences=False)  # the values V rest on the proved gamma
+        # the values V rest on the proved gamma; a unit load starts from the slacks, so it gets more pivots
+        _, count = paths.policy(LOAD_PATH_UNIT_PIVOTS * pivots // LOAD_PATH_PIVOTS, units=True, incidences=False)
         total += count
         bound = float(paths.V.max(initial=0.0))
         if best is not None and bound >= (1 - LOAD_PATH_STALL) * best.bound:
@@ -317,7 +319,8 @@ class _Paths:
         return [np.concatenate(part) for part in zip(*found)], done
 
     def evaluate(self, policy) -> bool:
-        """Set ``gamma`` to the proved cost of the certificates that ``policy`` builds; False where it proves nothing.
+        """Set ``gamma`` to the proved cost of the certificates that ``policy`` builds; False where it proves nothing
+        (``gamma`` then holds the values the policy's iteration reached: a guess for the next pass).
 
         With the local solutions fixed, the costs solve ``gamma = c + P gamma``
         (``c`` the tolerances paid on the block, ``P >= 0`` the loads passed
@@ -349,15 +352,18 @@ class _Paths:
         P = sp.csr_matrix((weights[take], (rows[take], index[links[take]])), shape=(keep.sum(), keep.sum()))
         c = parts[keep]
         solution = np.maximum(self.gamma[incidences[keep]], c)
-        changes = []
+        changes, pushed = [], None
         for _ in range(0, LOAD_PATH_EVALUATION_STEPS, 25):
             before = solution
             for _ in range(25):  # the costs of the fixed policy, from the current values (value iteration)
                 solution = c + P @ solution
+            pushed = solution if pushed is None else pushed
             changes.append(float(np.abs(solution - before).max()))
-            if len(changes) > 4 and changes[-1] > 0.9 * changes[-4]:
-                return False  # not converging: the loads circulate (an improper policy) or too slowly
-            if not np.all(np.isfinite(solution)):
+            if not np.all(np.isfinite(solution)) or (len(changes) > 4 and changes[-1] > 0.9 * changes[-4]):
+                # not converging: the loads circulate (an improper policy) or too slowly.  The values after
+                # the first steps are a better guess than before (modified policy iteration): the next pass
+                # starts there
+                self.gamma[incidences[keep]] = np.maximum(self.gamma[incidences[keep]], pushed)
                 return False
             passed = solution - P @ solution  # a supersolution times (1 + eta) needs (1 + eta) passed >= c
             if np.all(passed > 0):
@@ -450,6 +456,7 @@ def _simplex(M: np.ndarray, c: np.ndarray, e: np.ndarray, b: np.ndarray, pivots:
             d1 = c1w
         phase_one = (d1 < -1e-9).any(axis=1)
         candidates = np.where(phase_one[:, None], d1 < -1e-9, (d1 <= 1e-9) & (d2 < -1e-12 * scale[work, None]))
+        np.put_along_axis(candidates, Ba, False, axis=1)  # a basic column's reduced cost is zero up to rounding
         improving = candidates.any(axis=1)
         if step_number < 3 * pivots // 4:  # Dantzig's rule first, then Bland's, which cannot cycle
             enter = np.where(phase_one, d1.argmin(axis=1), np.where(candidates, d2, np.inf).argmin(axis=1))

@@ -44,7 +44,7 @@ from interlock.verify.load_paths import LOAD_PATH_PASSES, load_path_bound
 __all__ = ["Margin", "MarginError", "assess", "rounding_tolerance", "input_precision", "row_tolerances",
            "margin_lower_bound", "tolerant_motion", "coordinate_motion",
            "GRID_BITS", "DECIMAL_MIN_RTOL", "DECIMAL_MAX_RTOL", "DECIMAL_FULL_SHARE", "PRECISION_FACTOR",
-           "MARGIN_CHUNK", "EXACT_RTOL", "TOLERANT_SHARE", "BEND_FACTOR"]
+           "MARGIN_CHUNK", "EXACT_RTOL", "TOLERANT_SHARE", "BEND_FACTOR", "MOTION_TIME_LIMIT"]
 
 #: Coordinates that are all multiples of a power of two with at most this many significant bits lie on a
 #: grid (voxel puzzles, generated lattices): they are taken as exact, whatever type they were stored in.
@@ -65,6 +65,10 @@ BEND_FACTOR = 2.0
 MARGIN_CHUNK = 256
 #: :func:`tolerant_motion` relaxes each row by this share of its tolerance.
 TOLERANT_SHARE = 0.99
+#: Seconds HiGHS may spend on one motion LP of the upper bound (:func:`tolerant_motion`,
+#: :func:`coordinate_motion`); beyond, the margin says "solver stopped: time limit".  On the 4,800-block hexagon
+#: (69,471 x 27,360) the tolerant-motion LP had not finished after 20 minutes.
+MOTION_TIME_LIMIT = 120.0
 #: A tolerance at most this times the model size is far below the rank and LP tolerances of
 #: :func:`~interlock.verify.check.check` (1e-6, 1e-7): the margin is not computed and the float verdict stands.
 EXACT_RTOL = 1e-12
@@ -230,10 +234,8 @@ def tolerant_motion(A: sp.csr_matrix, eps: np.ndarray, tol: float = 1e-9):
     objective = -np.asarray(A.sum(axis=0)).ravel()
     # rows relaxed by a little less than eps, so that HiGHS' feasibility tolerance cannot push a row past it
     result = scipy.optimize.linprog(objective, A_ub=-A, b_ub=TOLERANT_SHARE * eps, bounds=(-1.0, 1.0), method="highs",
-                                    options={"primal_feasibility_tolerance": tol})
-    if result.status != 0 or result.x is None:
-        return None, math.inf, f"solver failed: {result.message}"
-    return _judged(A, eps, result.x)
+                                    options={"primal_feasibility_tolerance": tol, "time_limit": MOTION_TIME_LIMIT})
+    return _solved(A, eps, result)
 
 
 def coordinate_motion(A: sp.csr_matrix, eps: np.ndarray, column: int, sign: float = 1.0, tol: float = 1e-9):
@@ -253,7 +255,15 @@ def coordinate_motion(A: sp.csr_matrix, eps: np.ndarray, column: int, sign: floa
     objective = np.zeros(n)
     objective[column] = -float(sign)
     result = scipy.optimize.linprog(objective, A_ub=-A, b_ub=TOLERANT_SHARE * eps, bounds=(-1.0, 1.0), method="highs",
-                                    options={"primal_feasibility_tolerance": _positive("tol", tol)})
+                                    options={"primal_feasibility_tolerance": _positive("tol", tol),
+                                             "time_limit": MOTION_TIME_LIMIT})
+    return _solved(A, eps, result)
+
+
+def _solved(A, eps, result):
+    """A motion LP's answer as ``(x, rho, status)``: its motion judged, or why there is none."""
+    if result.status == 1 and "time" in str(result.message).lower():
+        return None, math.inf, f"solver stopped: time limit of {MOTION_TIME_LIMIT:.0f} s"
     if result.status != 0 or result.x is None:
         return None, math.inf, f"solver failed: {result.message}"
     return _judged(A, eps, result.x)
@@ -412,7 +422,7 @@ def assess(matrix, contacts, scale: float, stress, tolerance, source: str, *, pe
                                                                    found.coordinates, -1.0))),
                                         found.coordinates.shape)
         motion, upper, status = coordinate_motion(A, eps, int(column), 1.0 if side == 0 else -1.0)
-    if motion is None or upper > 1.0:
+    if (motion is None or upper > 1.0) and not status.startswith("solver stopped"):  # no second slow LP
         tried, tried_upper, tried_status = tolerant_motion(A, eps)
         if tried is not None and (motion is None or tried_upper < upper):
             motion, upper, status = tried, tried_upper, tried_status
