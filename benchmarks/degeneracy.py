@@ -33,6 +33,22 @@ D. **float32 files.**  The TopoLite bunny (80 parts), turned by a random
 E. **vertex noise.**  The bunny with every vertex moved by Gaussian noise of
    1e-12 ... 1e-3 of the model size (same truths; at the largest amplitudes the
    parts overlap and the input is refused).
+F. **the scene.**  Small cases with known truths — a unit cube enclosed by
+   six touching fixed cubes (interlocked), the same cube with a 1e-4 gap to
+   each neighbour (not interlocked: a gap wider than the tolerance is open),
+   Ex. 3.6's layer (interlocked), Ex. 3.5's grid (not) and the p4 patch
+   (interlocked) — in a larger scene: with one unrelated fixed cube 1e2 ...
+   1e9 away (touching nothing), and translated 1e3 ... 1e6 model sizes from
+   the origin, in float64 and rounded to float32 after translating (as an
+   STL would).  A verdict about some blocks must not depend on the scene
+   (issue 35); an "inconclusive" answer is acceptable only where the
+   precision the verdict states (``tolerances["tolerance"]``, its source
+   ``tolerances["tolerance_from"]``, ``margin``) is coarser than the
+   contacts, so each outcome records them with their ratio to the median
+   block size.  Float32 far from the origin rounds the caged cube's gaps to
+   multiples of its coordinates' step; its truth there is the gap rule
+   (docs/interlocking.md) on the gaps left: interlocked, with play, iff every
+   gap is within four roundings of its coordinates.
 C. **s, a change of units.**  Ex. 3.6's tilted cube layer (interlocked),
    Ex. 3.5's cube grid (the middle cube slides) and a p4 Escher patch with its
    ring fixed (interlocked, exact certificate) with every coordinate
@@ -70,6 +86,7 @@ longer resolves δ.
 
 from __future__ import annotations
 
+import json
 import math
 import time
 import warnings
@@ -83,7 +100,8 @@ from pathlib import Path
 
 from scipy.spatial.transform import Rotation
 
-from benchmarks.common import REFERENCE_DATA, main, pyplot, save_chart, write_json
+from benchmarks.common import (REFERENCE_DATA, add_arguments, pyplot, results_folder, save_chart,
+                               use_results_folder, write_json)
 from interlock import wallpaper
 from interlock.blocks import Assembly, escher_block, patch, periodic_cell, presets
 from interlock.errors import InterlockError
@@ -98,6 +116,15 @@ SEEDS = tuple(range(6))
 QUICK_SEEDS = (0,)
 NOISE = (1e-12, 1e-10, 1e-9, 1e-8, 1e-7, 1e-6, 1e-5, 1e-4, 1e-3)
 QUICK_NOISE = (1e-7,)
+#: Family F: distances of the far fixed cube, and shifts of the whole scene (in model sizes).
+FAR = tuple(10.0**k for k in range(2, 10))
+QUICK_FAR = (1e2, 1e5, 1e9)
+SHIFTS = tuple(10.0**k for k in range(3, 7))
+QUICK_SHIFTS = (1e3, 1e6)
+#: Family F: the direction of the far cube and of the shifts (no axis: every coordinate grows).
+SCENE_DIRECTION = np.array([1.0, 0.62, 0.37]) / np.linalg.norm([1.0, 0.62, 0.37])
+#: Family F: the caged cube's gap to each of its six neighbours (a float64 unit model: wider than the tolerance).
+CAGE_GAP = 1e-4
 #: The bunny's frames and their truths (TopoLite's test suite; ``tests/data/README.md``).
 BUNNY_FRAMES = {"frame {0, 1}": ((0, 1), True), "frame {1}": ((1,), False)}
 #: Patch radius (in lattice units of p1, a = 1) of family A.
@@ -295,6 +322,118 @@ def _bunny_family(parameter: str, values, build, quick: bool) -> dict:
     return {"parameter": parameter, "values": list(values), "truth": truths, "rows": rows}
 
 
+# --- family F: the scene: a far block, a far origin, float32 there ---------------------------------
+
+
+def _caged_cube(gap: float) -> Assembly:
+    """A unit cube and its six face neighbours (fixed), each ``gap`` away (0: touching)."""
+    box = lambda lo, hi: trimesh.creation.box(bounds=[lo, hi])  # noqa: E731
+    meshes = [box([0, 0, 0], [1, 1, 1])]
+    for axis in range(3):
+        for side in (-1, 1):
+            lo, hi = np.zeros(3), np.ones(3)
+            if side < 0:
+                lo[axis], hi[axis] = -1 - gap, -gap
+            else:
+                lo[axis], hi[axis] = 1 + gap, 2 + gap
+            meshes.append(box(lo, hi))
+    return Assembly.from_meshes(meshes, frame=range(1, 7))
+
+
+def _cage_truth(assembly) -> bool:
+    """The gap rule (docs/interlocking.md) on a caged cube as built: interlocked iff every gap left after rounding
+    is within the search distance ``max(4 delta, 1e-9 size)`` of the rounding ``delta`` of its coordinates
+    (``2^-24 max|x|`` for float32 ones, ``2^-53 max|x|`` otherwise)."""
+    meshes = list(assembly.world_meshes())
+    low, high = meshes[0].bounds
+    gaps = [max(m.bounds[0] - high) if (m.bounds[0] >= high - 0.5).any() else max(low - m.bounds[1])
+            for m in meshes[1:7]]
+    vertices = np.vstack([m.vertices for m in meshes[:7]])
+    float32 = np.array_equal(vertices, vertices.astype(np.float32).astype(np.float64))
+    delta = (2.0**-24 if float32 else 2.0**-53) * float(np.abs(vertices).max())
+    return bool(max(gaps) <= max(4 * delta, 1e-9 * np.linalg.norm(high - low)))
+
+
+def _scene_subjects() -> dict:
+    """name -> (assembly, truth) of family F; a truth may be a function of the assembly as built."""
+    return {"enclosed cube": (_caged_cube(0.0), True),
+            f"caged cube, gap {CAGE_GAP:g}": (_caged_cube(CAGE_GAP), _cage_truth),
+            "Ex. 3.6 layer": (presets.interlocking_cubes(), True),
+            "Ex. 3.5 grid": (presets.cube_grid(), False),
+            "p4 patch": (patch(_p4_block(), 1.0, frame="boundary"), True)}
+
+
+def _with_far_block(assembly: Assembly, distance: float) -> Assembly:
+    """The blocks and one more fixed unit cube ``distance`` beyond the model's box, touching nothing."""
+    meshes = list(assembly.world_meshes())
+    corner = np.vstack([m.vertices for m in meshes]).max(axis=0)
+    far = trimesh.creation.box(bounds=[[0, 0, 0], [1, 1, 1]])
+    far.apply_translation(corner + distance * SCENE_DIRECTION)
+    return Assembly.from_meshes([*meshes, far], frame=(*assembly.frame, len(meshes)))
+
+
+def _shifted(assembly: Assembly, sizes: float, float32: bool) -> Assembly:
+    """The blocks moved ``sizes`` model sizes from the origin (world coordinates), optionally rounded to float32."""
+    shift = sizes * assembly.scale * SCENE_DIRECTION
+    meshes = []
+    for mesh in assembly.world_meshes():
+        vertices = mesh.vertices + shift
+        if float32:
+            vertices = vertices.astype(np.float32).astype(np.float64)
+        meshes.append(trimesh.Trimesh(vertices, mesh.faces, process=False))
+    return Assembly.from_meshes(meshes, frame=assembly.frame)
+
+
+def _scene_columns(far, shifts) -> list:
+    """(label, build) per column: as given, far blocks, float64 shifts, float32 shifts."""
+    columns = [("as given", lambda a: a)]
+    columns += [(f"far {d:g}", lambda a, d=d: _with_far_block(a, d)) for d in far]
+    columns += [(f"f64 +{s:g}", lambda a, s=s: _shifted(a, s, False)) for s in shifts]
+    columns += [(f"f32 +{s:g}", lambda a, s=s: _shifted(a, s, True)) for s in shifts]
+    return columns
+
+
+def _scene_outcome(subject, truth: bool, frame, certify: bool) -> dict:
+    """``check``'s answer with the precision it states (tolerance, source, margin) and its ratio to the blocks."""
+    if isinstance(subject, InterlockError):
+        return {"verdict": "refused", "certified": False, "status": str(subject), "seconds": 0.0,
+                "class": "refused"}
+    start = time.perf_counter()
+    try:
+        v = check(subject, frame, certify=certify)
+    except InterlockError as error:
+        return {"verdict": "refused", "certified": False, "status": f"{type(error).__name__}: {error}",
+                "seconds": time.perf_counter() - start, "class": "refused"}
+    except Exception as error:  # noqa: BLE001 -- a defect of the library: recorded, shown as refused
+        return {"verdict": "refused", "certified": False, "status": f"crashed: {type(error).__name__}: {error}",
+                "seconds": time.perf_counter() - start, "class": "refused", "crashed": True}
+    seconds = time.perf_counter() - start
+    tolerance = v.tolerances.get("tolerance", None if v.margin is None else v.margin.tolerance)
+    ratio = None if tolerance is None else float(tolerance) / subject.block_size
+    return {"verdict": v.interlocked, "certified": bool(v.certified), "status": str(v), "seconds": seconds,
+            "class": _classify(v.interlocked, v.certified, truth, certify),
+            "tolerance": tolerance, "tolerance_from": v.tolerances.get("tolerance_from"),
+            "tolerance_per_block_size": ratio,
+            "margin": None if v.margin is None else [v.margin.lower, v.margin.upper]}
+
+
+def _family_f(far, shifts, quick: bool) -> dict:
+    columns = _scene_columns(far, shifts)
+    rows, truths = {}, {}
+    for name, (assembly, truth) in _scene_subjects().items():
+        subjects = [_build(build, assembly) for _, build in columns]
+        column_truths = [truth(s) if callable(truth) and not isinstance(s, InterlockError) else truth
+                         for s in subjects]
+        truths[name] = column_truths if callable(truth) else truth
+        modes = (False,) if quick else (False, True)
+        for certify in modes:
+            label = f"{name}: {'certify=True' if certify else 'check'}"
+            # the far block is fixed: the frame is the subject's own (plus that block)
+            rows[label] = [_scene_outcome(s, t, None if isinstance(s, InterlockError) else s.frame, certify)
+                           for s, t in zip(subjects, column_truths)]
+    return {"parameter": "scene", "values": [label for label, _ in columns], "truth": truths, "rows": rows}
+
+
 # --- family C: units -----------------------------------------------------------------------------
 
 
@@ -364,46 +503,106 @@ def _summary(family: dict) -> dict:
     return out
 
 
-def run(quick: bool = False) -> dict:
+def run(quick: bool = False, families=None) -> dict:
+    """Every family, or those named in ``families`` (the others are kept from the last results file)."""
     deltas = QUICK_DELTAS if quick else DELTAS
     scales = QUICK_SCALES if quick else SCALES
+    wanted = set(families or "ABCDEF")
     timings = {}
     families = {}
     with warnings.catch_warnings():
         # finite steps intersect blocks that only touch: trimesh divides a zero volume by zero
         warnings.simplefilter("ignore", RuntimeWarning)
         for key, build, values in (("A", _family_a, deltas), ("B", _family_b, deltas), ("C", _family_c, scales)):
+            if key in wanted:
+                start = time.perf_counter()
+                families[key] = build(values)
+                timings[key] = time.perf_counter() - start
+        if wanted & {"D", "E"}:
+            bunny = _bunny()
+            for key, parameter, values, build in (
+                    ("D", "seed", QUICK_SEEDS if quick else SEEDS, lambda seed: _float32_bunny(bunny, seed)),
+                    ("E", "amplitude", QUICK_NOISE if quick else NOISE, lambda a: _noisy_bunny(bunny, a))):
+                if key in wanted:
+                    start = time.perf_counter()
+                    families[key] = _bunny_family(parameter, values, build, quick)
+                    timings[key] = time.perf_counter() - start
+        if "F" in wanted:
             start = time.perf_counter()
-            families[key] = build(values)
-            timings[key] = time.perf_counter() - start
-        bunny = _bunny()
-        for key, parameter, values, build in (
-                ("D", "seed", QUICK_SEEDS if quick else SEEDS, lambda seed: _float32_bunny(bunny, seed)),
-                ("E", "amplitude", QUICK_NOISE if quick else NOISE, lambda a: _noisy_bunny(bunny, a))):
-            start = time.perf_counter()
-            families[key] = _bunny_family(parameter, values, build, quick)
-            timings[key] = time.perf_counter() - start
+            families["F"] = _family_f(QUICK_FAR if quick else FAR, QUICK_SHIFTS if quick else SHIFTS, quick)
+            timings["F"] = time.perf_counter() - start
+    families, timings, kept = _kept(families, timings, quick)
+    families = {key: families[key] for key in "ABCDEF" if key in families}
     summaries = {key: _summary(family) for key, family in families.items()}
-    delta_star = summaries["A"]["check: defaults"]["threshold"]
-    epsilon_star = summaries["B"]["check: defaults"]["threshold"]
+    delta_star = summaries["A"]["check: defaults"]["threshold"] if "A" in summaries else None
+    epsilon_star = summaries["B"]["check: defaults"]["threshold"] if "B" in summaries else None
     default_rows = ("check: defaults", "certify=True")
-    never_wrong = {key: all(not summaries[key][row]["wrong_at"] for row in default_rows) for key in ("A", "B")}
-    never_wrong["C"] = all(not s["wrong_at"] for s in summaries["C"].values())
+    never_wrong = {key: all(not summaries[key][row]["wrong_at"] for row in default_rows)
+                   for key in ("A", "B") if key in summaries}
+    for key in ("C", "F"):
+        if key in summaries:
+            never_wrong[key] = all(not s["wrong_at"] for s in summaries[key].values())
     for key in ("D", "E"):  # contact tolerances below the noise miss contacts: shown, but not the defaults
-        never_wrong[key] = all(not summaries[key][f"{frame}: {row}"]["wrong_at"]
-                               for frame in BUNNY_FRAMES for row in default_rows)
+        if key in summaries:
+            never_wrong[key] = all(not summaries[key][f"{frame}: {row}"]["wrong_at"]
+                                   for frame in BUNNY_FRAMES for row in default_rows)
     for key, family in families.items():
         for row, info in summaries[key].items():
-            wrong = ", ".join(f"{v:g}" for v in info["wrong_at"]) or "never"
+            wrong = ", ".join(_shown(v) for v in info["wrong_at"]) or "never"
             limit = "" if info["threshold"] is None else f", correct down to {info['threshold']:g}"
             print(f"{key} {row:42s}{limit}; wrong at {wrong} ({info['seconds']:.2f} s)")
-    print(f"delta* = {delta_star:g}, epsilon* = {epsilon_star:g}; defaults and certify=True never wrong: {never_wrong}")
+    scene = _scene_summary(families["F"]) if "F" in families else None
+    if scene is not None:
+        for column, counts in scene["by_column"].items():
+            print(f"F {column:12s} " + " ".join(f"{c} {counts[c]}" for c in CLASSES))
+    print(f"delta* = {delta_star}, epsilon* = {epsilon_star}; defaults and certify=True never wrong: {never_wrong}")
     payload = {"benchmark": "verdicts near degeneracy", "quick": quick, "delta_star": delta_star,
                "epsilon_star": epsilon_star, "defaults_never_wrong": never_wrong, "families": families,
-               "summary": summaries, "seconds": timings}
+               "summary": summaries, "scene": scene, "seconds": timings, "kept_from_last_run": kept}
     write_json("degeneracy", payload)
-    _chart(families, delta_star, epsilon_star, never_wrong["A"] and never_wrong["B"], never_wrong)
+    _chart(families, delta_star, epsilon_star, never_wrong.get("A", True) and never_wrong.get("B", True),
+           never_wrong)
     return payload
+
+
+def _shown(value) -> str:
+    return value if isinstance(value, str) else f"{value:g}"
+
+
+def _kept(families: dict, timings: dict, quick: bool):
+    """The families not run now, from the last results file of the same size (``quick``), and their keys."""
+    if set(families) == set("ABCDEF"):
+        return families, timings, []
+    path = results_folder() / "degeneracy.json"
+    try:
+        last = json.loads(path.read_text())
+    except (OSError, ValueError):
+        return families, timings, []
+    if last.get("quick") != quick:
+        return families, timings, []
+    kept = [key for key in last.get("families", {}) if key not in families]
+    return ({**{key: last["families"][key] for key in kept}, **families},
+            {**{key: last.get("seconds", {}).get(key) for key in kept}, **timings}, kept)
+
+
+def _scene_summary(family: dict) -> dict:
+    """Family F: classes per column and per kind of scene, and every inconclusive answer with the precision stated."""
+    outcomes = {column: [row[k] for row in family["rows"].values()] for k, column in enumerate(family["values"])}
+    by_column = {column: {c: sum(o["class"] == c for o in found) for c in CLASSES}
+                 for column, found in outcomes.items()}
+    kinds = {"as given": "as given", "far": "far block", "f64": "shifted, float64", "f32": "shifted, float32"}
+    by_kind = {}
+    for column, counts in by_column.items():
+        kind = kinds[column.split()[0]] if column.split()[0] in kinds else kinds[column]
+        total = by_kind.setdefault(kind, dict.fromkeys(CLASSES, 0))
+        for c in CLASSES:
+            total[c] += counts[c]
+    declined = [{"case": row, "scene": family["values"][k], "class": o["class"], "status": o["status"],
+                 "tolerance": o.get("tolerance"), "tolerance_from": o.get("tolerance_from"),
+                 "tolerance_per_block_size": o.get("tolerance_per_block_size"), "margin": o.get("margin")}
+                for row, found in family["rows"].items() for k, o in enumerate(found)
+                if o["class"] != "correct"]
+    return {"by_column": by_column, "by_kind": by_kind, "not_correct": declined}
 
 
 def _chart(families: dict, delta_star, epsilon_star, never_wrong: bool, by_family: dict) -> None:
@@ -419,10 +618,17 @@ def _chart(families: dict, delta_star, epsilon_star, never_wrong: bool, by_famil
               "D": "D: TopoLite bunny turned (seed) and written as float32 STL (truth: {0, 1} interlocked, {1} not)"
                    + ("" if by_family.get("D", True) else " — WRONG VERDICTS"),
               "E": "E: TopoLite bunny with vertex noise × model size (truth: {0, 1} interlocked, {1} not)"
-                   + ("" if by_family.get("E", True) else " — WRONG VERDICTS")}
+                   + ("" if by_family.get("E", True) else " — WRONG VERDICTS"),
+              "F": "F: the scene: a fixed cube far away, the whole moved (model sizes) in float64 and float32 "
+                   "(truth: as given)" + ("" if by_family.get("F", True) else " — WRONG VERDICTS")}
     heights = [len(f["rows"]) + 2 for f in families.values()]
     fig, axes = plt.subplots(len(families), 1, figsize=(12, 0.36 * sum(heights) + 1.5),
-                             gridspec_kw={"height_ratios": heights})
+                             gridspec_kw={"height_ratios": heights}, squeeze=False)
+    axes = axes[:, 0]
+    if "F" in families:
+        counts = _scene_summary(families["F"])["by_kind"]
+        titles["F"] += "\n" + "; ".join(f"{kind}: " + ", ".join(f"{n} {c}" for c, n in found.items() if n)
+                                        for kind, found in counts.items())
     colours = ListedColormap([COLOURS[c] for c in CLASSES])
     for ax, (key, family) in zip(axes, families.items()):
         rows = list(family["rows"])
@@ -431,26 +637,41 @@ def _chart(families: dict, delta_star, epsilon_star, never_wrong: bool, by_famil
         for (i, j), _ in np.ndenumerate(grid):
             if family["rows"][rows[i]][j]["certified"]:
                 ax.text(j, i, "c", ha="center", va="center", fontsize=7)
-        ax.set_xticks(range(len(family["values"])), [f"{v:g}" for v in family["values"]], fontsize=7)
+        ax.set_xticks(range(len(family["values"])), [_shown(v) for v in family["values"]], fontsize=7,
+                      rotation=30 if key == "F" else 0)
         ax.set_yticks(range(len(rows)), rows, fontsize=7)
         ax.set_xticks(np.arange(-0.5, len(family["values"])), minor=True)
         ax.set_yticks(np.arange(-0.5, len(rows)), minor=True)
         ax.grid(which="minor", color="#666666", linewidth=0.5)
         ax.tick_params(which="minor", length=0)
         ax.set_xlabel({"delta": "δ", "epsilon": "ε (radians)", "scale": "s", "seed": "rotation seed",
-                       "amplitude": "noise / model size"}[family["parameter"]], fontsize=8)
+                       "amplitude": "noise / model size",
+                       "scene": "scene (far: distance of the fixed cube; +s: shifted by s model sizes)"}[family["parameter"]], fontsize=8)
         star = {"A": delta_star, "B": epsilon_star}.get(key)
-        if star is not None:
+        if star is not None and star in family["values"]:
             ax.axvline(family["values"].index(star) + 0.5, color="black", linewidth=2)
         ax.set_title(titles[key], fontsize=9, loc="left")
     axes[-1].legend(handles=[Patch(facecolor=COLOURS[c], edgecolor="#666666", label=c) for c in CLASSES],
-                    loc="upper center", bbox_to_anchor=(0.5, -0.25), ncol=4, fontsize=8)
+                    loc="upper center", bbox_to_anchor=(0.5, -0.45 if "F" in families else -0.25), ncol=4,
+                    fontsize=8)
     below = "inconclusive below, never wrong" if never_wrong else "SOMETIMES WRONG below"
-    fig.suptitle(f"Verdicts near degeneracy: check with default tolerances is correct for δ ≥ δ* = {delta_star:g} "
-                 f"(ε ≥ {epsilon_star:g}), {below}", fontsize=10, x=0.02, ha="left")
+    fig.suptitle(f"Verdicts near degeneracy: check with default tolerances is correct for δ ≥ δ* = {delta_star} "
+                 f"(ε ≥ {epsilon_star}), {below}", fontsize=10, x=0.02, ha="left")
     save_chart(fig, "degeneracy")
     plt.close(fig)
 
 
+def _main() -> None:
+    import argparse
+
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    add_arguments(parser)
+    parser.add_argument("--families", default="ABCDEF", metavar="LETTERS",
+                        help="run only these families (e.g. F); the others are kept from the last results file")
+    args = parser.parse_args()
+    use_results_folder(args.results)
+    run(quick=args.quick, families=args.families.upper())
+
+
 if __name__ == "__main__":
-    main(run, __doc__)
+    _main()
