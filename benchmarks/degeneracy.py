@@ -539,9 +539,10 @@ def run(quick: bool = False, families=None) -> dict:
     default_rows = ("check: defaults", "certify=True")
     never_wrong = {key: all(not summaries[key][row]["wrong_at"] for row in default_rows)
                    for key in ("A", "B") if key in summaries}
-    for key in ("C", "F"):
-        if key in summaries:
-            never_wrong[key] = all(not s["wrong_at"] for s in summaries[key].values())
+    if "C" in summaries:
+        never_wrong["C"] = all(not s["wrong_at"] for s in summaries["C"].values())
+    # family F (issue 35's targets) is reported on its own: the library does not meet it yet
+    scene_never_wrong = all(not s["wrong_at"] for s in summaries["F"].values()) if "F" in summaries else None
     for key in ("D", "E"):  # contact tolerances below the noise miss contacts: shown, but not the defaults
         if key in summaries:
             never_wrong[key] = all(not summaries[key][f"{frame}: {row}"]["wrong_at"]
@@ -555,13 +556,15 @@ def run(quick: bool = False, families=None) -> dict:
     if scene is not None:
         for column, counts in scene["by_column"].items():
             print(f"F {column:12s} " + " ".join(f"{c} {counts[c]}" for c in CLASSES))
-    print(f"delta* = {delta_star}, epsilon* = {epsilon_star}; defaults and certify=True never wrong: {never_wrong}")
+    print(f"delta* = {delta_star}, epsilon* = {epsilon_star}; defaults and certify=True never wrong: {never_wrong}; "
+          f"the scene (F) never wrong: {scene_never_wrong}")
     payload = {"benchmark": "verdicts near degeneracy", "quick": quick, "delta_star": delta_star,
-               "epsilon_star": epsilon_star, "defaults_never_wrong": never_wrong, "families": families,
+               "epsilon_star": epsilon_star, "defaults_never_wrong": never_wrong,
+               "scene_never_wrong": scene_never_wrong, "families": families,
                "summary": summaries, "scene": scene, "seconds": timings, "kept_from_last_run": kept}
     write_json("degeneracy", payload)
     _chart(families, delta_star, epsilon_star, never_wrong.get("A", True) and never_wrong.get("B", True),
-           never_wrong)
+           {**never_wrong, "F": scene_never_wrong is not False})
     return payload
 
 
