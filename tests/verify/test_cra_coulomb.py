@@ -184,7 +184,9 @@ def test_shut_nearly_closed_adds_the_bounds_its_step_would_break(monkeypatch):
     import scipy.sparse as sp
 
     kinematic = sp.csr_matrix(np.array([[2.0, 1.0], [0, 0], [0, 0], [0, 0], [1.0, 0], [0, 0]]))
-    problem = SimpleNamespace(kinematic=kinematic, ratio=0.5)
+    from interlock.verify.budget import Budget
+
+    problem = SimpleNamespace(kinematic=kinematic, ratio=0.5, budget=Budget())
     motion = np.array([-0.5 + 1e-8, 5e-6])
     assert cra_coulomb.shut_nearly_closed(problem, motion) == pytest.approx([-0.5, 0.0], abs=1e-12)
     monkeypatch.setattr(cra_coulomb, "SHUT_MARGIN", -1.0)

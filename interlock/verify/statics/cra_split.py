@@ -145,8 +145,8 @@ def place_blocks(problem, b_eq, blocks, motion, progress=None, seed: int = 0):
     ``motion`` (solver units, every free block) is held fixed except at ``blocks``; it should be a proved motion
     of the rest (:func:`without_blocks`).  ``progress`` and ``seed`` as for :func:`split_route`; at most
     :data:`SPLIT_ATTEMPTS` IPOPT solves and :data:`SPLIT_ROUNDS` checks, and ``problem.budget``.  The whole is
-    judged by the forces of its slack LP, checked residual by residual (step 3): no least-``sum f_n`` LP after it.  At Clarabel's default tolerance (1e-8) those forces failed the
-    check at the armadillo's certificate; at :data:`~interlock.verify.statics.cra_coulomb.CHECKED_TOLERANCE` they
+    judged by the forces of its slack LP, checked residual by residual (step 3): no least-``sum f_n`` LP after
+    it.  At Clarabel's default tolerance (1e-8) those forces failed the check at the armadillo's certificate; at :data:`~interlock.verify.statics.cra_coulomb.CHECKED_TOLERANCE` they
     pass, in 0.6 s where HiGHS' simplex took 4-13 s for the slack LP and 12 s for the exact one.
     """
     rows, kept_contacts = _kept(problem, blocks)
