@@ -195,6 +195,9 @@ def test_load_path_bound_is_sound(seed, blocks, size, extra):
     found = load_path_bound(A, eps, block_size=size)
     assert found.bound >= exact * (1 - 1e-9)
     assert np.all(found.coordinates.max(axis=1) <= found.bound)
+    # with a target, coordinates above it are bounded again by exact LPs over their neighbourhoods
+    targeted = load_path_bound(A, eps, block_size=size, target=0.5 * exact if np.isfinite(exact) else 1.0)
+    assert targeted.bound >= exact * (1 - 1e-9)
     if np.isfinite(found.bound):
         assert found.margin == pytest.approx(1 / found.bound)
 
