@@ -26,10 +26,11 @@ import json
 import statistics
 import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
-from benchmarks.common import load_average, main, pyplot, results_folder, save_chart, write_json
+from benchmarks.common import load_average, main, pyplot, save_chart, write_json
 
 #: Limits (seconds) and runs per point; the quick run (tests) takes one small case at 1 s once.
 LIMITS, QUICK_LIMITS = (1.0, 5.0, 20.0), (1.0,)
@@ -83,8 +84,7 @@ def _answer(output: str) -> str:
 
 def run(quick: bool = False) -> dict:
     limits, runs, sizes = (QUICK_LIMITS, QUICK_RUNS, QUICK_SIZES) if quick else (LIMITS, RUNS, SIZES)
-    folder = results_folder() / "limits-models"
-    folder.mkdir(parents=True, exist_ok=True)
+    folder = Path(tempfile.mkdtemp(prefix="interlock-limits-"))  # the OBJ models, not results
     rows = []
     for n in sizes:
         path = _model(n, folder)
