@@ -57,7 +57,9 @@ largest vertex displacement of the steps before the first overlap; it stops
 at 10 % of the model size, or where the moving blocks are clear).
 The *band* holds the cases with ``reach >= 10 p``; the share of them that
 came back inconclusive, "not interlocked within tolerance", refused or
-crashed is the *declined share*.  Targets (issue 35): 0 wrong, at most 10 % declined in the band, 0
+crashed is the *declined share*.  Where the margin's lower bound is loose
+(the bunny's is 0), the band is also given with the margin's upper bound
+(``declined_in_upper_band``; not proved, a motion attains it).  Targets (issue 35): 0 wrong, at most 10 % declined in the band, 0
 refused for re-triangulation.
 
 Reading the chart: one bar per family, stacked by class (green right, red
@@ -305,15 +307,20 @@ def perturbed(subject: str, placement: int, family: str, seed: int = SEED) -> As
 # --- the reference and its reach ------------------------------------------------------------------
 
 
-def _reach(assembly: Assembly, frame, verdict) -> tuple[float | None, str]:
-    """The original's reach (a length, see the module docstring) and how it was measured."""
+def _reach(assembly: Assembly, frame, verdict) -> tuple[float | None, float | None, str]:
+    """The original's reach (a length, see the module docstring), an upper estimate, and how they were measured.
+
+    For an interlocked original the upper estimate is the margin's upper bound times the tolerance (a motion
+    attains it); for one that is not, it is the reach itself.
+    """
     try:
         if verdict.interlocked is True:
             t = REACH_TOLERANCE * assembly.scale
             measured = check(assembly, frame=frame, tolerance=t, time_limit=TIME_LIMIT)
             if measured.margin is None:
-                return None, f"no margin ({measured.status})"
-            return float(measured.margin.lower) * t, "margin lower bound x tolerance"
+                return None, None, f"no margin ({measured.status})"
+            return (float(measured.margin.lower) * t, float(measured.margin.upper) * t,
+                    f"margin x tolerance ({measured.margin})")
         if verdict.interlocked is False and verdict.motion is not None:
             moved = finite_motion(assembly, verdict.motion, frame=frame)
             clear = 0.0
@@ -321,10 +328,10 @@ def _reach(assembly: Assembly, frame, verdict) -> tuple[float | None, str]:
                 if fraction > OVERLAP_RTOL:
                     break
                 clear = max(clear, displacement)
-            return clear, f"finite motion ({moved.ending})"
+            return clear, clear, f"finite motion ({moved.ending})"
     except InterlockError as error:
-        return None, f"refused: {type(error).__name__}: {error}"
-    return None, "undecided original"
+        return None, None, f"refused: {type(error).__name__}: {error}"
+    return None, None, "undecided original"
 
 
 def _decide(assembly: Assembly, frame) -> dict:
@@ -372,11 +379,11 @@ def _references(subject: str, frames: dict) -> dict:
             v, answer, status = None, "refused", f"{type(error).__name__}: {error}"
         seconds = time.perf_counter() - start
         reference = known if known is not None else (answer if answer in (True, False) else None)
-        reach, how = _reach(original, frame, v) if v is not None else (None, "original refused")
+        reach, upper, how = _reach(original, frame, v) if v is not None else (None, None, "original refused")
         if reach is None and v is not None and v.interlocked is not True and known is True:
             how += "; original not interlocked"
         out[name] = {"frame": list(frame), "known": known, "original": answer, "original_status": status,
-                     "original_seconds": seconds, "reference": reference, "reach": reach, "reach_from": how,
+                     "original_seconds": seconds, "reference": reference, "reach": reach, "reach_upper": upper, "reach_from": how,
                      "original_wrong": known is not None and answer in (True, False) and answer != known}
         print(f"  {subject} frame {name}: original {answer} ({seconds:.1f} s), reference {reference}, "
               f"reach {reach} ({how})", flush=True)
@@ -415,10 +422,11 @@ def run(quick: bool = False, placements: int | None = None, large: bool = False,
                         else:
                             outcome = _decide(assembly, tuple(ref["frame"]))
                         cls = _classify(outcome, ref["reference"])
-                        reach = ref["reach"]
+                        reach, upper = ref["reach"], ref["reach_upper"]
                         case = {"subject": subject, "frame": name, "placement": placement, "family": family,
                                 "reference": ref["reference"], "class": cls, "perturbation": p,
                                 "reach": reach, "in_band": reach is not None and reach >= BAND_FACTOR * p,
+                                "in_upper_band": upper is not None and upper >= BAND_FACTOR * p,
                                 "declined": _declined(outcome), "prepare_seconds": prepare, **outcome}
                         cases.append(case)
                         if cls in ("wrong", "refused", "crashed"):
@@ -446,10 +454,14 @@ def _summary(cases) -> dict:
     for family in FAMILIES:
         mine = [c for c in cases if c["family"] == family]
         band = [c for c in mine if c["in_band"]]
+        upper_band = [c for c in mine if c["in_upper_band"]]
         seconds = [c["seconds"] for c in mine if c["verdict"] not in ("refused", "crashed")]
         out[family] = {"cases": len(mine), "counts": {k: sum(c["class"] == k for c in mine) for k in CLASSES},
                        "in_band": len(band),
                        "declined_in_band": (sum(c["declined"] for c in band) / len(band)) if band else None,
+                       "in_upper_band": len(upper_band),
+                       "declined_in_upper_band": (sum(c["declined"] for c in upper_band) / len(upper_band))
+                       if upper_band else None,
                        "median_seconds": statistics.median(seconds) if seconds else 0.0,
                        "by_subject": {s: {k: sum(c["class"] == k for c in mine if c["subject"] == s) for k in CLASSES}
                                       for s in dict.fromkeys(c["subject"] for c in mine)}}
