@@ -23,7 +23,7 @@ from interlock.verify.admissible import (MOVING_RTOL, bent_contacts, moving_name
 from interlock.verify.budget import Budget, TimeLimitReached
 from interlock.verify.contacts import PRESS_RTOL, Contact, contacts as find_contacts, model_contacts, search_distances
 from interlock.verify.margin import Margin, assess, margin_lower_bound
-from interlock.verify.precision import Precision, block_precision
+from interlock.verify.precision import PRECISION_FACTOR, Precision, block_precision
 from interlock.verify.matrix import InterlockingMatrix, interlocking_matrix
 from interlock.verify.validate import refuse_overlaps_without_contact, validate as check_overlaps
 
@@ -277,6 +277,12 @@ def _decide(assembly, frame, translational, certify, rank_rtol, lp_tol, contacts
     """The body of :func:`check` after its arguments were checked; raises TimeLimitReached when ``budget`` is spent."""
     precision = block_precision(assembly)
     distance = search_distances(assembly, precision)
+    coarse = _too_coarse(assembly, frame, precision)
+    if coarse is not None:
+        return Verdict(None, coarse, frame=tuple(assembly.block_indices(assembly.frame if frame is None else frame)),
+                       shape=(0, 0), rank=0, lp_value=None, translational=translational, timings=timings, order=order,
+                       tolerances={"tolerance": float(PRECISION_FACTOR * precision.delta.max()),
+                                   "tolerance_from": precision.describe()})
     if validate:
         with _stage(timings, "validate", progress, budget):
             # a re-meshed block whose faces lie where they were may not overlap by a boolean's volume alone: its
@@ -446,6 +452,30 @@ def _stage(timings: dict, name: str, progress, budget: Budget | None = None):
 
 
 # --- numerics ---------------------------------------------------------------------
+
+
+def _too_coarse(assembly: Assembly, frame, precision: Precision) -> str | None:
+    """Why the input is too coarse to decide, or None: a free block, or a neighbour of one, whose coordinates'
+    rounding (times :data:`~interlock.verify.precision.PRECISION_FACTOR`) reaches :data:`COARSE_RATIO` of its size.
+
+    Float32 coordinates 1e6 model sizes from the origin round a unit cube's corners by 0.25: no contact survives,
+    and any verdict would be about geometry the file does not hold.
+    """
+    fixed = set(assembly.block_indices(assembly.frame if frame is None else frame))
+    free = [b for b in range(len(assembly)) if b not in fixed]
+    graph = assembly.neighbours
+    near = sorted(set(free).union(*(graph[b] for b in free)))
+    if not near:
+        return None
+    near = np.asarray(near)
+    ratio = PRECISION_FACTOR * precision.delta[near] / assembly.block_sizes[near]
+    worst = int(near[np.argmax(ratio)])
+    if ratio.max() < COARSE_RATIO:
+        return None
+    return (f"inconclusive: the file's precision {PRECISION_FACTOR * precision.delta[worst]:.2g} "
+            f"({precision.source[worst]} at coordinates up to {np.abs(assembly.bounds[worst]).max():.3g}) is coarser "
+            f"than its blocks: block {worst} is {assembly.block_sizes[worst]:.3g} across; move the model near the "
+            f"origin or store it in float64")
 
 
 def contact_tolerances(found, precision: Precision, tolerance=None, bends: bool = True) -> np.ndarray:

@@ -463,3 +463,17 @@ def test_a_file_coarser_than_its_contacts_is_inconclusive_saying_so(bunny):
     for frame in ([0], [0, 1]):
         v = check(coarse, frame=frame, certify=True)
         assert v.interlocked is None and "is coarser than its blocks' contacts" in v.status and not v.certified
+
+
+@pytest.mark.parametrize("sizes", [1e5, 1e6])
+def test_float32_far_from_the_origin_coarser_than_the_blocks_is_inconclusive(sizes):
+    """A unit cage moved 1e5..1e6 model sizes and rounded to float32: corners rounded by up to 0.25."""
+    cage = _caged_cube()
+    shift = sizes * cage.scale
+    meshes = []
+    for mesh in cage.world_meshes():
+        moved = mesh.copy().apply_translation([shift, shift / 2, 0.0])
+        moved.vertices = np.float32(moved.vertices).astype(float)
+        meshes.append(moved)
+    v = check(Assembly.from_meshes(meshes, frame=list(cage.frame)), certify=True)
+    assert v.interlocked is None and not v.certified and "coarser than its blocks" in v.status
