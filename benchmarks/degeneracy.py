@@ -655,7 +655,7 @@ def _chart(families: dict, delta_star, epsilon_star, never_wrong: bool, by_famil
             ax.axvline(family["values"].index(star) + 0.5, color="black", linewidth=2)
         ax.set_title(titles[key], fontsize=9, loc="left")
     axes[-1].legend(handles=[Patch(facecolor=COLOURS[c], edgecolor="#666666", label=c) for c in CLASSES],
-                    loc="upper center", bbox_to_anchor=(0.5, -0.45 if "F" in families else -0.25), ncol=4,
+                    loc="upper center", bbox_to_anchor=(0.5, -0.36 if "F" in families else -0.25), ncol=4,
                     fontsize=8)
     below = "inconclusive below, never wrong" if never_wrong else "SOMETIMES WRONG below"
     fig.suptitle(f"Verdicts near degeneracy: check with default tolerances is correct for δ ≥ δ* = {delta_star} "
