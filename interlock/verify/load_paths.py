@@ -41,11 +41,18 @@ blocks in layers (by distance from the frame, outside in and back) settle
 the local solutions; from pass :data:`LOAD_PATH_FIRST_TRY` on, the last
 pass's solutions are the policy: its costs are found by value iteration,
 inflated by the least share that makes them a supersolution, and the
-inequality checked (:meth:`_Paths.evaluate`); policies that do not pass
-(loads that circulate) are not used.  Then a pass of (1) for the unit loads
-gives ``V``; policy iteration may improve it (:data:`LOAD_PATH_IMPROVEMENTS`).
-On RhomBlock hexagons rounded to float32 the converged bound is within 25 %
-of the exact LPs; the first proof, which decides, within a factor 2 to 20.
+inequality checked (:meth:`_Paths.evaluate`); a policy that does not pass
+(loads that circulate) proves nothing, but the values its first 25
+iteration steps reached start the next pass (modified policy iteration).
+Then a pass of (1) for the unit loads gives ``V``; policy iteration
+improves it (:data:`LOAD_PATH_IMPROVEMENTS`), and coordinates still above the
+target get exact LPs over their neighbourhood (:func:`_regional`).  On
+RhomBlock hexagons rounded to float32 the converged bound is within 25 % of
+the exact LPs (n = 8); the first proof, which decides, is 2 to 25 times
+weaker.  Where no policy passes within :data:`LOAD_PATH_PASSES` passes
+nothing is proved: on p4 Escher patches of radius 9 and 12 the values
+double with each pass (measured; carrying each vertex row's load apart
+seems to lose too much there).
 
 Floating point: the 6 x 6 systems are solved in floats; each value is
 inflated by :data:`LOAD_PATH_SAFETY` and negative rounding residues of the
