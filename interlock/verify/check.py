@@ -22,7 +22,8 @@ from interlock.verify.admissible import (MOVING_RTOL, bent_contacts, moving_name
                                          unless_missed)
 from interlock.verify.budget import Budget, TimeLimitReached
 from interlock.verify.contacts import PRESS_RTOL, Contact, contacts as find_contacts, model_contacts, search_distances
-from interlock.verify.margin import Margin, assess, margin_lower_bound
+from interlock.verify.load_paths import load_path_bound
+from interlock.verify.margin import Margin, assess
 from interlock.verify.precision import PRECISION_FACTOR, Precision, block_precision
 from interlock.verify.matrix import InterlockingMatrix, interlocking_matrix
 from interlock.verify.validate import refuse_overlaps_without_contact, validate as check_overlaps
@@ -373,7 +374,7 @@ def _decide(assembly, frame, translational, certify, rank_rtol, lp_tol, contacts
             verdict = _with_margin(verdict, assess(A, found, assembly.block_size, stress, limits, source,
                                                    per_contact=True), A, len(assembly),
                                    _coarsest(found, A, limits) if tolerance is None else None)
-            verdict = _with_play(verdict, A, found, stress)
+            verdict = _with_play(verdict, A, found)
     if certify:
         from interlock.verify.certify import certify_verdict
 
@@ -506,21 +507,24 @@ def _tolerance_source(found, A: InterlockingMatrix, precision: Precision) -> str
     return source + (f"; faces bent by up to {max(bends):.2g}" if bends else "")
 
 
-def _with_play(verdict: Verdict, A: InterlockingMatrix, found, stress) -> Verdict:
+def _with_play(verdict: Verdict, A: InterlockingMatrix, found) -> Verdict:
     """An "interlocked" verdict on contacts across gaps, with the play the gaps allow to first order.
 
     Rows ``r`` of a contact across a gap ``g_r`` (:attr:`~interlock.verify.contacts.Contact.separation`)
-    may close by ``g_r``: every motion with ``A x >= -g`` is a play.  By LP duality with the positive stress
-    (:func:`~interlock.verify.margin.margin_lower_bound` with ``eps = g``) every such motion has
-    ``|x|_inf <= B``: no block turns by more than ``B`` radians nor moves by more than ``B L``.
+    may close by ``g_r``: every motion with ``A x >= -g`` is a play.  The load paths of
+    :func:`~interlock.verify.load_paths.load_path_bound` (with ``eps = g``) prove ``|x|_inf <= B`` for every
+    such motion: no block turns by more than ``B`` radians nor moves by more than ``B L``.
     """
     gaps = np.array([c.separation for c in found], dtype=float)
-    if verdict.interlocked is not True or stress is None or not len(A.row_contact) or not gaps[A.row_contact].any():
+    if verdict.interlocked is not True or not len(A.row_contact) or not gaps[A.row_contact].any():
         return verdict
     row_gaps = gaps[A.row_contact]
     # rows without a gap may not open at all: a floor far below the gaps keeps the bound's tolerances positive
-    rho = margin_lower_bound(A.matrix, np.maximum(row_gaps, 1e-9 * row_gaps.max()), stress)
-    play = A.length_scale / rho if rho > 0 else math.inf
+    proved = load_path_bound(A.matrix, np.maximum(row_gaps, 1e-9 * row_gaps.max()), A.block_size)
+    if math.isinf(proved.bound):
+        return dataclasses.replace(verdict, status=f"{verdict.status}; gaps up to {row_gaps.max():.3g} within the "
+                                                   "contact tolerance (no bound on their play proved)")
+    play = A.length_scale * proved.bound
     widest = float(gaps[A.row_contact].max())
     return dataclasses.replace(verdict, status=f"{verdict.status}; play at most {play:.3g}: the largest motion the "
                                                f"gaps permit (gaps up to {widest:.3g} within the contact tolerance)",

@@ -107,8 +107,11 @@ class Margin:
         else:
             upper = "" if self.upper_status == "not needed" else f" (upper bound: {self.upper_status})"
         each = "up to " if self.per_contact else ""
-        return (f"margin at least {self.lower:.3g}{upper} times the tolerance {each}{self.tolerance:.3g} "
-                f"({self.source})")
+        if self.lower <= 0:  # nothing proved: say so, not "at least 0"
+            bound = f"no margin proved{upper.replace(', at most', '; at most')}"
+        else:
+            bound = f"margin at least {self.lower:.3g}{upper}"
+        return f"{bound} times the tolerance {each}{self.tolerance:.3g} ({self.source})"
 
     def to_dict(self) -> dict:
         return {"lower": json_float(self.lower), "upper": json_float(self.upper), "tolerance": self.tolerance,
