@@ -52,9 +52,10 @@ def test_gradient_rows_are_the_interlocking_matrix_rows():
     pair = Assembly.from_meshes(boxes[:2])
     from interlock.verify import interlocking_matrix
 
-    A = interlocking_matrix(pair, frame=[]).matrix.toarray()
+    matrix = interlocking_matrix(pair, frame=[])
+    A = matrix.matrix.toarray()
     (contact,) = check.__globals__["find_contacts"](pair)
-    L = pair.scale
+    L = matrix.length_scale
     g, _ = gap_expansion(contact.vertices, np.broadcast_to(contact.normal, (4, 3)), pair.centroids[[1] * 4],
                          pair.centroids[[0] * 4], L)
     expected = np.hstack([g[:, 6:], g[:, :6]])  # columns of block 0 (the face), then block 1 (the points)
