@@ -233,8 +233,9 @@ def search_distances(assembly: Assembly, precision=None) -> np.ndarray:
 
     >>> import trimesh
     >>> far = [trimesh.creation.box(bounds=[[x, 0, 0], [x + 1, 1, 1]]) for x in (0, 1e9)]
-    >>> search_distances(Assembly.from_meshes(far)).tolist()  # each block its own, however large the scene
-    [1.7320508075688772e-09, 1.7320508075688772e-09]
+    >>> near, distant = search_distances(Assembly.from_meshes(far))  # each block its own: its size, its coordinates
+    >>> float(near), bool(1e-5 < distant < 1e-4)
+    (1.7320508075688772e-09, True)
     """
     precision = block_precision(assembly) if precision is None else precision
     return np.maximum(PRECISION_FACTOR * np.asarray(precision.delta, dtype=float), SEARCH_RTOL * assembly.block_sizes)

@@ -58,15 +58,23 @@ class Precision:
 
     ``source[b]`` is one of "grid", "float32", "decimals 1e-06" (a fixed
     quantum), "6 significant digits", "float64" (read from a file) or
-    "computed float64" (placed by a transform).
+    "computed float64" (placed by a transform).  ``read[b]`` is the rounding
+    the numbers alone show (for float64, one unit in the last place), before
+    the allowance of :data:`COMPUTED_ULPS` for computed geometry.
     """
 
     delta: np.ndarray
     source: tuple[str, ...]
+    read: np.ndarray | None = None
 
-    def contact_tolerance(self, i: int, j: int) -> float:
-        """:data:`PRECISION_FACTOR` times the mean rounding of blocks ``i`` and ``j``."""
-        return PRECISION_FACTOR * 0.5 * float(self.delta[i] + self.delta[j])
+    def contact_tolerance(self, i: int, j: int, read: bool = False) -> float:
+        """:data:`PRECISION_FACTOR` times the mean rounding of blocks ``i`` and ``j``.
+
+        ``read=True``: the rounding the numbers show alone (``read``), without the allowance for computed
+        float64 geometry: a face bent beyond it is bent as far as the input can tell.
+        """
+        delta = self.delta if not read or self.read is None else self.read
+        return PRECISION_FACTOR * 0.5 * float(delta[i] + delta[j])
 
     def describe(self, blocks=None) -> str:
         """The sources of the given blocks (default all), most common first, e.g. ``"float32 input"``."""
@@ -150,6 +158,7 @@ def block_precision(assembly) -> Precision:
     per_type = [coordinate_precision(mesh.vertices) for mesh in assembly.meshes]
     delta = np.array([per_type[t][0] for t in assembly.types], dtype=float)
     source = [per_type[t][1] for t in assembly.types]
+    read = delta.copy()
     # placed by a transform, or read as float64 from a file: computed geometry, a few dozen units in the last place
     placed = ~np.all(np.isclose(assembly.transforms, np.eye(4), rtol=0.0, atol=0.0), axis=(1, 2))
     placed |= np.array([s == "float64" for s in source])
@@ -158,10 +167,11 @@ def block_precision(assembly) -> Precision:
         largest = np.abs(bounds).max(axis=(1, 2))
         computed = COMPUTED_ULPS * _EPS64 * largest
         delta[placed] = np.maximum(delta[placed], computed)
+        read[placed] = np.maximum(read[placed], _EPS64 * largest)
         for b in np.flatnonzero(placed):
             if source[b] in ("grid", "float64"):
                 source[b] = "computed float64"
-    return Precision(delta, tuple(source))
+    return Precision(delta, tuple(source), read)
 
 
 def _cut_to(x: np.ndarray, quantum: float):
