@@ -284,19 +284,18 @@ def _decide(assembly, frame, translational, certify, rank_rtol, lp_tol, contacts
                        shape=(0, 0), rank=0, lp_value=None, translational=translational, timings=timings, order=order,
                        tolerances={"tolerance": float(PRECISION_FACTOR * precision.delta.max()),
                                    "tolerance_from": precision.describe()})
-    if validate:
-        with _stage(timings, "validate", progress, budget):
-            # a re-meshed block whose faces lie where they were may not overlap by a boolean's volume alone: its
-            # measured depth must pass what the contacts accept as pressed faces (PRESS_RTOL of the block)
-            shallow = check_overlaps(assembly, depth=np.maximum(distance, PRESS_RTOL * assembly.block_sizes))
-    with _stage(timings, "contacts", progress, budget):
+    with _stage(timings, "validate" if validate else "contacts", progress, budget):
+        # the contacts first: the noise and bends their faces show widen each block's tolerance for overlaps
         found = model_contacts(assembly, contacts, precision)
-        if validate:  # overlaps that pass the volume rule must still be touches, within each block's own tolerance
-            # at least what the search accepts as faces pressed together (PRESS_RTOL of the block): a boolean's
-            # sliver along an edge touch says nothing about depth below that
+        if validate:
+            # a re-meshed or noisy block whose faces lie where they were may not overlap by a boolean's volume
+            # alone: its measured depth must pass what its contacts accept (at least PRESS_RTOL of the block)
             distance = np.maximum(distance, PRESS_RTOL * assembly.block_sizes)
-            for c in found:  # a block whose faces show noise or bends is as uncertain as they are
+            for c in found:
                 distance[[c.i, c.j]] = np.maximum(distance[[c.i, c.j]], c.tolerance or 0.0)
+            shallow = check_overlaps(assembly, depth=distance)
+    if validate:
+        with _stage(timings, "contacts", progress, budget):  # overlaps that pass must still be touches
             deep = [o for o in shallow if o.deepness > distance[o.i] + distance[o.j]]
             widest = max((distance[o.i] + distance[o.j] for o in deep), default=0.0)
             refuse_overlaps_without_contact(assembly, deep, found, float(widest))
@@ -474,10 +473,11 @@ def _too_coarse(assembly: Assembly, frame, precision: Precision) -> str | None:
     worst = int(near[np.argmax(ratio)])
     if ratio.max() < COARSE_RATIO:
         return None
+    remedy = ("move the model near the origin or store it in float64" if "float" in precision.source[worst]
+              else "write its coordinates with more digits")
     return (f"inconclusive: the file's precision {PRECISION_FACTOR * precision.delta[worst]:.2g} "
             f"({precision.source[worst]} at coordinates up to {np.abs(assembly.bounds[worst]).max():.3g}) is coarser "
-            f"than its blocks: block {worst} is {assembly.block_sizes[worst]:.3g} across; move the model near the "
-            f"origin or store it in float64")
+            f"than its blocks: block {worst} is {assembly.block_sizes[worst]:.3g} across; {remedy}")
 
 
 def contact_tolerances(found, precision: Precision, tolerance=None, bends: bool = True,

@@ -123,17 +123,22 @@ def coordinate_precision(values) -> tuple[float, str]:
     nonzero = x[x != 0]
     if len(nonzero) < DECIMAL_MIN_VALUES:
         return top * _EPS64, "float64"
+    found = []
     for digits in range(DECIMAL_MIN_DIGITS, 16):  # a fixed quantum 10^(e - digits + 1) for every number
         quantum = 10.0 ** (exponent - digits + 1)
         if _cut_to(x, quantum) is not None and np.mean(_cut_to(x, quantum) % 10 != 0) >= DECIMAL_FULL_SHARE:
-            return 0.5 * quantum, f"decimals {quantum:.0e}"
+            found.append((0.5 * quantum, f"decimals {quantum:.0e}"))
+            break
     exponents = np.floor(np.log10(np.abs(nonzero)))
     for digits in range(DECIMAL_MIN_DIGITS, 16):  # k significant digits: each number its own quantum
         with np.errstate(all="ignore"):  # quanta below the smallest float64 are no rounding anyone wrote
             units = nonzero / 10.0 ** (exponents - digits + 1)
         if (np.all(np.isfinite(units)) and np.all(np.abs(units - np.round(units)) <= 1e-6)
                 and np.mean(np.round(units) % 10 != 0) >= DECIMAL_FULL_SHARE):
-            return 0.5 * 10.0 ** (exponent - digits + 1), f"{digits} significant digits"
+            found.append((0.5 * 10.0 ** (exponent - digits + 1), f"{digits} significant digits"))
+            break
+    if found:  # %.6g numbers below 10 are also multiples of 1e-5: the largest ones were cut coarser
+        return max(found)
     return top * _EPS64, "float64"
 
 
