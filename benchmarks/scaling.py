@@ -81,9 +81,8 @@ from pathlib import Path
 
 import numpy as np
 
-from benchmarks.common import (BLAS_THREADS, limited_blas, load_average, main, naive_verdict, pyplot, save_chart,
+from benchmarks.common import (BLAS_THREADS, limited_blas, load_average, naive_verdict, pyplot, save_chart,
                                write_json)
-from interlock.blocks import Assembly
 from interlock import wallpaper
 from interlock.blocks import Assembly, escher_block, patch, random_hexagon, rhomblock_assembly
 from interlock.gallery import export
@@ -208,6 +207,8 @@ def run(quick: bool = False) -> dict:
     write_json("scaling", payload)
     _chart(payload)
     payload["float32"] = run_float32(quick)
+    payload["peers"] = run_peers(quick)
+    payload["grid"] = run_grid(quick)
     return payload
 
 
@@ -328,6 +329,300 @@ def _float32_chart(payload: dict) -> None:
         ax.grid(True, which="major", alpha=0.3)
     save_chart(fig, "scaling_float32")
     plt.close(fig)
+
+
+# --- peer-like matrices with a small frame, and the cube grid (issue 40) ------------------------------------
+
+#: Seconds for every ``check`` of the peer and grid families, so that nothing hangs (a verdict that reaches
+#: it says "inconclusive: time limit reached ..." and is recorded as such).
+TIME_LIMIT = 600.0
+#: Runs per size and frame (the frames alternate in one process, so the ratios share the machine's load).
+PEER_RUNS = 3
+#: Blocks of the "few fixed" frame: this many ring blocks, evenly spread (issue 40's 559-block peer had 10 of
+#: its 186 ring blocks fixed).
+FEW = 10
+#: The TopoLite bunny: 80 parts; frame {0, 1} interlocks, frame {1} does not (``tests/data/README.md``).
+BUNNY_PARTS, BUNNY_RING, BUNNY_ONE = 80, (0, 1), (1,)
+#: Copies of the bunny side by side are this fraction of its width apart (they do not touch).
+BUNNY_GAP = 0.5
+
+
+@dataclass(frozen=True)
+class PeerFamily:
+    """Peer-like assemblies of growing size: ``generate(size)`` gives (assembly, {frame name: fixed blocks})."""
+
+    name: str
+    generate: Callable[[object], tuple]
+    size_name: str
+    description: str
+    sizes: tuple
+    quick_sizes: tuple
+
+
+def _ring_frames(assembly: Assembly) -> tuple:
+    ring = assembly.boundary()
+    few = tuple(ring[k] for k in np.linspace(0, len(ring), FEW, endpoint=False).astype(int))
+    return assembly, {"ring": tuple(ring), "one": (0,), "few": few}
+
+
+def p4_peers(radius: float) -> tuple:
+    """The p4 patch of the scaling family (edges 0 and 1 deformed): the ring, block 0, or 10 ring blocks fixed."""
+    return _ring_frames(patch(escher_block(wallpaper.group("p4"), ESCHER_DEFORMATION), radius))
+
+
+def p6_peers(radius: float) -> tuple:
+    """A patch of the p6 block of main paper Fig. 1: the ring, block 0, or 10 ring blocks fixed."""
+    from interlock.blocks.presets import fig1
+
+    return _ring_frames(patch(fig1.fig1_p6_block(), radius))
+
+
+_BUNNY: list = []
+
+
+def bunny_peers(copies: int) -> tuple:
+    """``copies`` TopoLite bunnies side by side (not touching): frame {0, 1} of each ("ring", interlocked),
+    {1} of the first ("one") or {1} of each ("few"); fresh meshes every call (nothing cached between runs)."""
+    import trimesh
+
+    from benchmarks.common import REFERENCE_DATA
+
+    if not _BUNNY:
+        folder = REFERENCE_DATA / "topolite" / "bunny"
+        _BUNNY.extend(Assembly.load([folder / f"part_{k}.obj" for k in range(1, BUNNY_PARTS + 1)],
+                                    frame=()).world_meshes())
+    meshes = [trimesh.Trimesh(m.vertices.copy(), m.faces.copy(), process=False) for m in _BUNNY]
+    low = np.min([m.bounds[0] for m in meshes], axis=0)
+    high = np.max([m.bounds[1] for m in meshes], axis=0)
+    step = (1 + BUNNY_GAP) * (high - low)[0]
+    side = int(np.ceil(np.sqrt(copies)))
+    transforms = np.tile(np.eye(4), (copies * BUNNY_PARTS, 1, 1))
+    for copy in range(copies):
+        transforms[copy * BUNNY_PARTS:(copy + 1) * BUNNY_PARTS, :2, 3] = (copy % side * step,
+                                                                         copy // side * step)
+    assembly = Assembly(meshes, np.tile(np.arange(BUNNY_PARTS), copies), transforms)
+    every = [copy * BUNNY_PARTS for copy in range(copies)]
+    return assembly, {"ring": tuple(c + k for c in every for k in BUNNY_RING), "one": BUNNY_ONE,
+                      "few": tuple(c + k for c in every for k in BUNNY_ONE)}
+
+
+PEER_FAMILIES = (
+    PeerFamily("p4", p4_peers, "radius", "p4 Escher patch (edges 0, 1 deformed)", (3, 6, 12, 19.2), (1, 2)),
+    PeerFamily("p6", p6_peers, "radius", "p6 Escher patch (main paper Fig. 1 block)", (3, 6, 10, 14.6), (1,)),
+    PeerFamily("bunny", bunny_peers, "copies", "TopoLite bunny (80 parts), copies side by side",
+               (1, 4, 16, 30), (1,)),
+)
+#: What each frame is, for the JSON.
+PEER_FRAMES = {"ring": "positive: the outer ring fixed (bunny: parts 0 and 1 of every copy)",
+               "one": "negative: block 0 fixed (bunny: part 1 of the first copy)",
+               "few": f"negative: {FEW} ring blocks evenly spread (bunny: part 1 of every copy)"}
+
+
+def run_peers(quick: bool = False, names=None, sizes=None) -> dict:
+    """The peer family: per size, the negative verdicts ("one", "few") over the positive ("ring"); target <= 2."""
+    start, load = time.perf_counter(), load_average()
+    families = {}
+    with limited_blas():
+        _peer_row(PEER_FAMILIES[0], PEER_FAMILIES[0].quick_sizes[0], runs=1)  # warm-up (imports, first calls)
+        for family in PEER_FAMILIES:
+            if names and family.name not in names:
+                continue
+            rows = [_peer_row(family, size, PEER_RUNS)
+                    for size in sizes or (family.quick_sizes if quick else family.sizes)]
+            families[family.name] = {"description": family.description, "size": family.size_name, "rows": rows}
+    every = [row for family in families.values() for row in family["rows"]]
+    payload = {
+        "benchmark": "scaling_peers",
+        "quick": quick,
+        "policy": {"runs": PEER_RUNS, "time_limit": TIME_LIMIT, "blas_threads": BLAS_THREADS,
+                   "seconds": "wall time of check(assembly, validate=False, time_limit=...), median of the runs",
+                   "frames": PEER_FRAMES},
+        "load_average_at_start": load,
+        "families": families,
+        "summary": {"sizes": len(every),
+                    "largest_ratio": max((r for row in every for r in row["ratios"].values()), default=None),
+                    "over_twice": [f"{row['family']} {row['blocks']} {k}" for row in every
+                                   for k, r in row["ratios"].items() if r > 2],
+                    "unexpected": [f"{row['family']} {row['blocks']} {k}: {f['status'][:80]}" for row in every
+                                   for k, f in row["frames"].items() if f["interlocked"] is not (k == "ring")]},
+        "seconds": time.perf_counter() - start,
+    }
+    print("peers: " + ", ".join(f"{k} {v}" for k, v in payload["summary"].items()))
+    if not (names or sizes):  # a partial run does not replace the record
+        write_json("scaling_peers", payload)
+        _peers_chart(payload)
+    return payload
+
+
+def _peer_row(family: PeerFamily, size, runs: int) -> dict:
+    """One size: every frame ``runs`` times on a fresh assembly, frames alternating (rotated each run)."""
+    names = list(PEER_FRAMES)
+    seconds = {name: [] for name in names}
+    stages = {name: [] for name in names}
+    last = {}
+    for run in range(runs):
+        for name in names[run % len(names):] + names[:run % len(names)]:
+            assembly, frames = family.generate(size)
+            begin = time.perf_counter()
+            verdict = check(assembly, frames[name], validate=False, time_limit=TIME_LIMIT)
+            seconds[name].append(time.perf_counter() - begin)
+            stages[name].append(verdict.timings)
+            last[name] = (verdict, frames[name])
+    row = {"family": family.name, "size": size, "blocks": len(assembly), "runs": runs, "frames": {}}
+    for name in names:
+        verdict, fixed = last[name]
+        row["frames"][name] = {
+            "fixed": len(fixed), "shape": list(verdict.shape), "interlocked": verdict.interlocked,
+            "status": verdict.status[:300], "motion_from": verdict.tolerances.get("motion_from"),
+            "seconds": statistics.median(seconds[name]), "run_seconds": seconds[name],
+            "stages": {k: statistics.median(t.get(k, 0.0) for t in stages[name]) for k in stages[name][-1]}}
+    ring = row["frames"]["ring"]["seconds"]
+    row["ratios"] = {name: row["frames"][name]["seconds"] / ring for name in names if name != "ring"}
+    print(f"peers {family.name} {family.size_name}={size} ({row['blocks']} blocks, {runs} runs): " + "; ".join(
+        f"{name} [{f['fixed']} fixed] {f['seconds']:.3f} s {f['interlocked']} ({f['motion_from']})"
+        for name, f in row["frames"].items()) + " | " + ", ".join(f"{k}/ring {r:.2f}"
+                                                                   for k, r in row["ratios"].items()), flush=True)
+    return row
+
+
+def _peers_chart(payload: dict) -> None:
+    plt = pyplot()
+    if plt is None:
+        return
+    fig, grid = plt.subplots(1, 2, figsize=(13, 5))
+    styles = {"ring": "o-", "one": "s--", "few": "D:"}
+    for (name, family), colour in zip(payload["families"].items(), ("C0", "C1", "C2")):
+        rows = family["rows"]
+        blocks = [row["blocks"] for row in rows]
+        for frame, style in styles.items():
+            grid[0].loglog(blocks, [row["frames"][frame]["seconds"] for row in rows], style, color=colour, ms=3,
+                           label=f"{name}: {frame}")
+            if frame != "ring":
+                grid[1].semilogx(blocks, [row["ratios"][frame] for row in rows], style, color=colour, ms=4,
+                                 label=f"{name}: {frame} / ring")
+    grid[1].axhline(2.0, color="grey", ls=":", label="target: 2x")
+    grid[0].set_ylabel("seconds (median of check)")
+    grid[0].set_title("positive (ring fixed) and negative (one or few fixed) verdicts", fontsize=9)
+    grid[1].set_ylabel("negative over positive")
+    grid[1].set_title("negative verdict time over positive, same assembly, same process", fontsize=9)
+    for ax in grid:
+        ax.set_xlabel("blocks")
+        ax.legend(fontsize=6.5)
+        ax.grid(True, which="major", alpha=0.3)
+    save_chart(fig, "scaling_peers")
+    plt.close(fig)
+
+
+#: The grid family: (grid side, hexagon n) per size; 100 x 100 cubes against the 10,800-block hexagon (n = 60).
+GRID_SIZES, GRID_QUICK_SIZES = ((30, 17), (60, 35), (100, 60)), ((6, 4),)
+#: Runs of each (alternating) per size, and no further pair once the pairs so far plus one would pass this (s).
+GRID_RUNS, GRID_BUDGET = 3, 240.0
+
+
+def cube_grid(side: int) -> Assembly:
+    """``side`` x ``side`` touching unit cubes in the x-z plane; the top and bottom rows fixed."""
+    import trimesh
+
+    cells = np.array([(i, j) for j in range(side) for i in range(side)], dtype=float)
+    transforms = np.tile(np.eye(4), (len(cells), 1, 1))
+    transforms[:, 0, 3], transforms[:, 2, 3] = cells[:, 0], cells[:, 1]
+    rows = [k for k, (_, j) in enumerate(cells) if j in (0, side - 1)]
+    return Assembly([trimesh.creation.box((1.0, 1.0, 1.0))], np.zeros(len(cells), dtype=int), transforms, frame=rows)
+
+
+def run_grid(quick: bool = False, sizes=None) -> dict:
+    """The cube grid against the RhomBlock hexagon of about as many blocks; target: grid <= 2x hexagon."""
+    start, load = time.perf_counter(), load_average()
+    rows = []
+    for side, n in sizes or (GRID_QUICK_SIZES if quick else GRID_SIZES):
+        code = ("import json; from benchmarks.scaling import grid_child; "
+                f"print(json.dumps(grid_child({side}, {n})))")
+        done = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True)
+        if done.returncode != 0:
+            rows.append({"side": side, "n": n, "failed": done.stderr.strip().splitlines()[-3:]})
+            print(f"grid {side} / hexagon {n} failed: {rows[-1]['failed']}", flush=True)
+            continue
+        rows.append(json.loads(done.stdout.strip().splitlines()[-1]))
+        row = rows[-1]
+        print(f"grid {side}x{side} ({row['grid']['blocks']} blocks) {row['grid']['seconds']:.2f} s "
+              f"{row['grid']['interlocked']}, {row['grid']['peak_mb']:.0f} MB; hexagon n={n} "
+              f"({row['hexagon']['blocks']} blocks) {row['hexagon']['seconds']:.2f} s {row['hexagon']['interlocked']}, "
+              f"{row['hexagon']['peak_mb']:.0f} MB; ratio {row['ratio']:.2f} ({row['runs']} runs)", flush=True)
+    payload = {"benchmark": "scaling_grid", "quick": quick,
+               "policy": {"runs": GRID_RUNS, "budget_seconds": GRID_BUDGET, "time_limit": TIME_LIMIT,
+                          "blas_threads": BLAS_THREADS,
+                          "seconds": "wall time of check(assembly, validate=False, time_limit=...), median; "
+                                     "grid and hexagon alternate in one fresh process per size",
+                          "peak_mb": "peak resident set during the check above the resident set at its start "
+                                     "(VmHWM after clear_refs), MB"},
+               "load_average_at_start": load, "rows": rows, "seconds": time.perf_counter() - start}
+    if sizes is None:
+        write_json("scaling_grid", payload)
+        _grid_chart(payload)
+    return payload
+
+
+def grid_child(side: int, n: int) -> dict:
+    """In a fresh interpreter: the grid and the hexagon alternately, wall times and peak memory of each check."""
+    import clarabel  # noqa: F401  (imported on first use; not counted in the first check's memory)
+
+    makers = {"grid": lambda: cube_grid(side), "hexagon": lambda: rhomblocks(n)}
+    seconds = {name: [] for name in makers}
+    peaks = {name: [] for name in makers}
+    result, spent = {}, 0.0
+    with limited_blas():
+        check(cube_grid(3), validate=False)  # warm-up
+        while len(seconds["grid"]) < GRID_RUNS:
+            pair = 0.0
+            for name, make in makers.items():
+                assembly = make()
+                _reset_peak()
+                before = _proc_status("VmRSS")
+                begin = time.perf_counter()
+                verdict = check(assembly, validate=False, time_limit=TIME_LIMIT)
+                seconds[name].append(time.perf_counter() - begin)
+                peaks[name].append((_proc_status("VmHWM") - before) / MB)
+                pair += seconds[name][-1]
+                result[name] = {"blocks": len(assembly), "fixed": len(assembly.frame), "shape": list(verdict.shape),
+                                "interlocked": verdict.interlocked, "status": verdict.status[:300],
+                                "motion_from": verdict.tolerances.get("motion_from"),
+                                "stages": {k: round(v, 4) for k, v in verdict.timings.items()}}
+            spent += pair
+            if spent + pair > GRID_BUDGET:
+                break
+    for name in makers:
+        result[name].update(seconds=statistics.median(seconds[name]), run_seconds=seconds[name],
+                            peak_mb=max(peaks[name]))
+    return {"side": side, "n": n, "runs": len(seconds["grid"]), **result,
+            "ratio": result["grid"]["seconds"] / result["hexagon"]["seconds"]}
+
+
+def _grid_chart(payload: dict) -> None:
+    plt = pyplot()
+    if plt is None:
+        return
+    rows = [row for row in payload["rows"] if "failed" not in row]
+    fig, grid = plt.subplots(1, 2, figsize=(13, 5))
+    for name, colour in (("grid", "C0"), ("hexagon", "C1")):
+        blocks = [row[name]["blocks"] for row in rows]
+        label = "cube grid (top, bottom rows fixed)" if name == "grid" else "RhomBlock hexagon (ring fixed)"
+        grid[0].loglog(blocks, [row[name]["seconds"] for row in rows], "o-", color=colour, label=label)
+        grid[1].loglog(blocks, [row[name]["peak_mb"] for row in rows], "o-", color=colour, label=label)
+    twin = grid[0].twinx()
+    twin.semilogx([row["grid"]["blocks"] for row in rows], [row["ratio"] for row in rows], "k:", marker="x",
+                  label="grid / hexagon (right axis)")
+    twin.axhline(2.0, color="grey", ls="--", lw=0.8)
+    twin.set_ylabel("grid over hexagon (target <= 2, dashed)")
+    grid[0].set_ylabel("seconds (median of check)")
+    grid[1].set_ylabel("peak memory of the check (MB)")
+    for ax in grid:
+        ax.set_xlabel("blocks")
+        ax.legend(fontsize=7, loc="upper left")
+        ax.grid(True, which="major", alpha=0.3)
+    twin.legend(fontsize=7, loc="lower right")
+    save_chart(fig, "scaling_grid")
+    plt.close(fig)
+
 
 
 # --- timings -------------------------------------------------------------------
@@ -599,9 +894,35 @@ def _memory_panel(ax, families: dict) -> None:
     ax.grid(True, which="major", alpha=0.3)
 
 
-if __name__ == "__main__":
-    if "--float32" in sys.argv:  # the float32 family alone
-        sys.argv.remove("--float32")
-        main(run_float32, __doc__)
+def _command_line() -> None:
+    """``python -m benchmarks.scaling [--quick] [--float32 | --peers [NAMES] | --grid] [--sizes ...]``."""
+    import argparse
+
+    from benchmarks.common import add_arguments, use_results_folder
+
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    add_arguments(parser)
+    alone = parser.add_mutually_exclusive_group()
+    alone.add_argument("--float32", action="store_true", help="the float32 family alone")
+    alone.add_argument("--peers", nargs="?", const="", metavar="NAMES",
+                       help="the peer family alone (optionally some of p4,p6,bunny)")
+    alone.add_argument("--grid", action="store_true", help="the cube grid against the hexagon alone")
+    parser.add_argument("--sizes", metavar="LIST",
+                        help="with --peers: sizes (radius or copies) as 3,6; with --grid: side:n pairs as 30:17; "
+                             "a run with sizes does not replace the recorded JSON")
+    args = parser.parse_args()
+    use_results_folder(args.results)
+    if args.float32:
+        run_float32(args.quick)
+    elif args.peers is not None:
+        sizes = [float(s) if "." in s else int(s) for s in args.sizes.split(",")] if args.sizes else None
+        run_peers(args.quick, [n for n in args.peers.split(",") if n] or None, sizes)
+    elif args.grid:
+        sizes = [tuple(int(x) for x in s.split(":")) for s in args.sizes.split(",")] if args.sizes else None
+        run_grid(args.quick, sizes)
     else:
-        main(run, __doc__)
+        run(args.quick)
+
+
+if __name__ == "__main__":
+    _command_line()
