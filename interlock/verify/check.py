@@ -240,7 +240,7 @@ def check(assembly: Assembly, frame=None, translational: bool = False, certify: 
         return _decide(assembly, frame, translational, certify, rank_rtol, lp_tol, contacts, validate, progress,
                        lp_solver, order, tolerance, budget, timings)
     except TimeLimitReached as reached:
-        return Verdict(None, f"inconclusive: {reached} (time_limit = {budget.limit:g} s)", frame=(), shape=(0, 0),
+        return Verdict(None, f"{reached} (time_limit = {budget.limit:g} s)", frame=(), shape=(0, 0),
                        rank=0, lp_value=None, translational=translational,
                        tolerances={"time_limit": budget.limit, "stage": reached.stage}, timings=timings, order=order)
 
@@ -286,7 +286,7 @@ def _decide(assembly, frame, translational, certify, rank_rtol, lp_tol, contacts
                                    "tolerance_from": precision.describe()})
     with _stage(timings, "validate" if validate else "contacts", progress, budget):
         # the contacts first: the noise and bends their faces show widen each block's tolerance for overlaps
-        found = model_contacts(assembly, contacts, precision)
+        found = model_contacts(assembly, contacts, precision, budget)
         if validate:
             # a re-meshed or noisy block whose faces lie where they were may not overlap by a boolean's volume
             # alone: its measured depth must pass what its contacts accept (at least PRESS_RTOL of the block)
@@ -475,7 +475,7 @@ def _too_coarse(assembly: Assembly, frame, precision: Precision) -> str | None:
         return None
     remedy = ("move the model near the origin or store it in float64" if "float" in precision.source[worst]
               else "write its coordinates with more digits")
-    return (f"inconclusive: the file's precision {PRECISION_FACTOR * precision.delta[worst]:.2g} "
+    return (f"the file's precision {PRECISION_FACTOR * precision.delta[worst]:.2g} "
             f"({precision.source[worst]} at coordinates up to {np.abs(assembly.bounds[worst]).max():.3g}) is coarser "
             f"than its blocks: block {worst} is {assembly.block_sizes[worst]:.3g} across; {remedy}")
 
@@ -567,7 +567,7 @@ def _with_margin(verdict: Verdict, margin: Margin, A: InterlockingMatrix, blocks
         return dataclasses.replace(verdict, status=f"{verdict.status}; {margin}")
     if coarsest is not None and coarsest[0] >= COARSE_RATIO * coarsest[1]:
         return dataclasses.replace(verdict, interlocked=None, status=(
-            f"inconclusive: the file's precision {coarsest[0]:.2g} is coarser than its blocks' contacts (one is "
+            f"the file's precision {coarsest[0]:.2g} is coarser than its blocks' contacts (one is "
             f"{coarsest[1]:.2g} across; {margin}); the exact input is interlocked ({verdict.status})"))
     if margin.motion is not None and margin.upper <= 1.0:
         motion, moving = _motion(A, margin.motion, blocks, reversible=False)

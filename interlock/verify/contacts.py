@@ -62,7 +62,7 @@ KIND_SHARE = 0.5
 
 def contacts(assembly: Assembly, rtol: float | None = None, angle_tol: float = DEFAULT_ANGLE_TOL,
              area_rtol: float = DEFAULT_AREA_RTOL, involving=None,
-             gap: float = DEFAULT_GAP_RTOL, precision=None) -> tuple[Contact, ...]:
+             gap: float = DEFAULT_GAP_RTOL, precision=None, budget=None) -> tuple[Contact, ...]:
     """All face-to-face contacts between the blocks of an assembly.
 
     Two blocks are in contact where a facet of one and a facet of the other
@@ -113,6 +113,10 @@ def contacts(assembly: Assembly, rtol: float | None = None, angle_tol: float = D
     precision : Precision, optional
         The blocks' rounding (default: read off the coordinates by
         :func:`~interlock.verify.precision.block_precision`).
+    budget : Budget, optional
+        A time budget (:mod:`interlock.verify.budget`), checked between blocks
+        of the facet matching and before the overlaps: TimeLimitReached
+        ("contacts") when spent.
     gap : float, optional
         Gap tolerance relative to ``assembly.scale`` (default
         ``DEFAULT_GAP_RTOL`` = 0: only touching faces).  Facets with opposite
@@ -204,7 +208,7 @@ def contacts(assembly: Assembly, rtol: float | None = None, angle_tol: float = D
         return ()
     kinds, kind_of, relative = assembly.pair_kinds(pairs)
     if len(kinds) > KIND_SHARE * len(pairs):
-        return _pair_contacts(assembly, pairs, local)
+        return _pair_contacts(assembly, pairs, local, budget)
     # instanced blocks: one computation per kind of pair, on a stand-in of two blocks, moved to every pair; each
     # stand-in block takes the coarsest tolerance of the blocks it stands for
     i, j = pairs[kinds].T
@@ -216,7 +220,7 @@ def contacts(assembly: Assembly, rtol: float | None = None, angle_tol: float = D
         np.maximum.at(widest[k], 2 * kind_of, values[pairs[:, 0]])
         np.maximum.at(widest[k], 2 * kind_of + 1, values[pairs[:, 1]])
     stand_in_tolerances = _Tolerances(*widest, local.grouping, local.angle, local.gap, local.tilt)
-    computed = _pair_contacts(stand_in, np.arange(2 * len(kinds)).reshape(-1, 2), stand_in_tolerances)
+    computed = _pair_contacts(stand_in, np.arange(2 * len(kinds)).reshape(-1, 2), stand_in_tolerances, budget)
     by_kind = {}
     for contact in computed:
         by_kind.setdefault(contact.i // 2, []).append(contact)
@@ -279,7 +283,7 @@ class _Tolerances:
 GIVEN_CONTACTS = "contacts"
 
 
-def model_contacts(assembly: Assembly, given=None, precision=None) -> tuple[Contact, ...]:
+def model_contacts(assembly: Assembly, given=None, precision=None, budget=None) -> tuple[Contact, ...]:
     """The contacts a verdict uses: ``given`` if not None, else those the assembly carries, else :func:`contacts`.
 
     An assembly carries contacts in ``assembly.info[GIVEN_CONTACTS]`` when
@@ -297,13 +301,17 @@ def model_contacts(assembly: Assembly, given=None, precision=None) -> tuple[Cont
         if not all(isinstance(c, Contact) for c in carried):
             raise ContactError(f"assembly.info[{GIVEN_CONTACTS!r}] must hold Contact objects")
         return tuple(carried)
-    return contacts(assembly, precision=precision)
+    return contacts(assembly, precision=precision, budget=budget)
 
 
-def _pair_contacts(assembly, pairs, tolerances: _Tolerances) -> tuple[Contact, ...]:
-    """Contacts of the given block pairs under the per-block ``tolerances``."""
+def _pair_contacts(assembly, pairs, tolerances: _Tolerances, budget=None) -> tuple[Contact, ...]:
+    """Contacts of the given block pairs under the per-block ``tolerances`` (``budget`` checked between steps)."""
     table = FacetTable(assembly, tolerances.grouping, tolerances.angle, needed=np.unique(pairs))
-    gi, gj, atol = _matches(table, pairs, tolerances)
+    if budget is not None:
+        budget.check("contacts")
+    gi, gj, atol = _matches(table, pairs, tolerances, budget)
+    if budget is not None:
+        budget.check("contacts")
     return _overlaps(table, gi, gj, atol, tolerances)
 
 
@@ -341,7 +349,7 @@ def _facet_tolerances(table: FacetTable, tolerances: _Tolerances):
     return distance, np.maximum(tolerances.angle, tilt), diameter
 
 
-def _matches(table: FacetTable, pairs, tolerances: _Tolerances):
+def _matches(table: FacetTable, pairs, tolerances: _Tolerances, budget=None):
     """Global facet indices (gi, gj) of coplanar facets with opposite normals, blocks i < j, and their distance
     tolerances.
 
@@ -357,7 +365,9 @@ def _matches(table: FacetTable, pairs, tolerances: _Tolerances):
     gi, gj = [], []
     # one tree per block i, queried at once with the facets of all its partners j; offsets about block i's
     # facets' centre, so that nothing depends on where the scene lies
-    for i, partners in zip(*_grouped(pairs)):
+    for count, (i, partners) in enumerate(zip(*_grouped(pairs))):
+        if budget is not None and count % 256 == 0:
+            budget.check("contacts")
         facets_i = np.arange(table.start[i], table.start[i + 1])
         facets_j = np.concatenate([np.arange(table.start[j], table.start[j + 1]) for j in partners])
         if not len(facets_j) or not len(facets_i):
