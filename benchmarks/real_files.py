@@ -503,6 +503,7 @@ def _chart(summary: dict, placements: int) -> None:
                   [f"{f}\n{summary[f]['median_seconds']:.2f} s" for f in families], fontsize=7, rotation=30,
                   ha="right")
     ax.set_ylabel("cases (subject x frame x placement)")
+    ax.set_ylim(0, 1.3 * max(bottom.max(), 1))  # room for the legend
     right = ax.twinx()
     shares = [summary[f]["declined_in_band"] for f in families]
     right.plot([k for k, s in enumerate(shares) if s is not None], [100 * s for s in shares if s is not None],
