@@ -407,8 +407,10 @@ def bunny_peers(copies: int) -> tuple:
 
 
 PEER_FAMILIES = (
-    PeerFamily("p4", p4_peers, "radius", "p4 Escher patch (edges 0, 1 deformed)", (3, 6, 12, 19.2), (1, 2)),
-    PeerFamily("p6", p6_peers, "radius", "p6 Escher patch (main paper Fig. 1 block)", (3, 6, 10, 14.6), (1,)),
+    PeerFamily("p4", p4_peers, "radius", "p4 Escher patch (edges 0, 1 deformed)", (3, 4, 5, 6, 8, 9, 12, 19.2),
+               (1, 2)),
+    PeerFamily("p6", p6_peers, "radius", "p6 Escher patch (main paper Fig. 1 block)", (3, 4, 5, 6, 8, 10, 14.5),
+               (1,)),
     PeerFamily("bunny", bunny_peers, "copies", "TopoLite bunny (80 parts), copies side by side",
                (1, 4, 16, 30), (1,)),
 )
@@ -443,6 +445,10 @@ def run_peers(quick: bool = False, names=None, sizes=None) -> dict:
                     "largest_ratio": max((r for row in every for r in row["ratios"].values()), default=None),
                     "over_twice": [f"{row['family']} {row['blocks']} {k}" for row in every
                                    for k, r in row["ratios"].items() if r > 2],
+                    "largest_verdict_ratio": max((r for row in every for r in row["verdict_ratios"].values()),
+                                                 default=None),
+                    "verdict_over_twice": [f"{row['family']} {row['blocks']} {k}" for row in every
+                                           for k, r in row["verdict_ratios"].items() if r > 2],
                     "unexpected": [f"{row['family']} {row['blocks']} {k}: {f['status'][:80]}" for row in every
                                    for k, f in row["frames"].items() if f["interlocked"] is not (k == "ring")]},
         "seconds": time.perf_counter() - start,
@@ -475,13 +481,18 @@ def _peer_row(family: PeerFamily, size, runs: int) -> dict:
             "fixed": len(fixed), "shape": list(verdict.shape), "interlocked": verdict.interlocked,
             "status": verdict.status[:300], "motion_from": verdict.tolerances.get("motion_from"),
             "seconds": statistics.median(seconds[name]), "run_seconds": seconds[name],
+            "verdict_seconds": statistics.median(sum(t.get(k, 0.0) for k in VERDICT) for t in stages[name]),
             "stages": {k: statistics.median(t.get(k, 0.0) for t in stages[name]) for k in stages[name][-1]}}
-    ring = row["frames"]["ring"]["seconds"]
-    row["ratios"] = {name: row["frames"][name]["seconds"] / ring for name in names if name != "ring"}
+    ring = row["frames"]["ring"]
+    row["ratios"] = {name: row["frames"][name]["seconds"] / ring["seconds"] for name in names if name != "ring"}
+    # without the margin (the positive verdict's "play" bound), which only an "interlocked" answer computes
+    row["verdict_ratios"] = {name: row["frames"][name]["verdict_seconds"] / ring["verdict_seconds"]
+                             for name in names if name != "ring"}
     print(f"peers {family.name} {family.size_name}={size} ({row['blocks']} blocks, {runs} runs): " + "; ".join(
-        f"{name} [{f['fixed']} fixed] {f['seconds']:.3f} s {f['interlocked']} ({f['motion_from']})"
-        for name, f in row["frames"].items()) + " | " + ", ".join(f"{k}/ring {r:.2f}"
-                                                                   for k, r in row["ratios"].items()), flush=True)
+        f"{name} [{f['fixed']} fixed] {f['seconds']:.3f} s (margin {f['stages'].get('margin', 0.0):.3f}) "
+        f"{f['interlocked']} ({f['motion_from']})" for name, f in row["frames"].items())
+        + " | " + ", ".join(f"{k}/ring {r:.2f} (contacts..lp {row['verdict_ratios'][k]:.2f})"
+                            for k, r in row["ratios"].items()), flush=True)
     return row
 
 
@@ -568,6 +579,7 @@ def grid_child(side: int, n: int) -> dict:
 
     makers = {"grid": lambda: cube_grid(side), "hexagon": lambda: rhomblocks(n)}
     seconds = {name: [] for name in makers}
+    verdicts = {name: [] for name in makers}
     peaks = {name: [] for name in makers}
     result, spent = {}, 0.0
     with limited_blas():
@@ -581,6 +593,7 @@ def grid_child(side: int, n: int) -> dict:
                 begin = time.perf_counter()
                 verdict = check(assembly, validate=False, time_limit=TIME_LIMIT)
                 seconds[name].append(time.perf_counter() - begin)
+                verdicts[name].append(sum(verdict.timings.get(k, 0.0) for k in VERDICT))
                 peaks[name].append((_proc_status("VmHWM") - before) / MB)
                 pair += seconds[name][-1]
                 result[name] = {"blocks": len(assembly), "fixed": len(assembly.frame), "shape": list(verdict.shape),
@@ -592,9 +605,10 @@ def grid_child(side: int, n: int) -> dict:
                 break
     for name in makers:
         result[name].update(seconds=statistics.median(seconds[name]), run_seconds=seconds[name],
-                            peak_mb=max(peaks[name]))
+                            verdict_seconds=statistics.median(verdicts[name]), peak_mb=max(peaks[name]))
     return {"side": side, "n": n, "runs": len(seconds["grid"]), **result,
-            "ratio": result["grid"]["seconds"] / result["hexagon"]["seconds"]}
+            "ratio": result["grid"]["seconds"] / result["hexagon"]["seconds"],
+            "verdict_ratio": result["grid"]["verdict_seconds"] / result["hexagon"]["verdict_seconds"]}
 
 
 def _grid_chart(payload: dict) -> None:
