@@ -722,7 +722,8 @@ def opening_motion(A: sp.csr_matrix, x, tol: float = LP_TOL):
     ``-1e-7 max(A x)``).  For each threshold ``kappa`` of
     :data:`FARKAS_CLOSED_RTOLS`, from fine to coarse, the rows below
     ``kappa max(A x)`` are projected shut, ``x <- x - A_C^+ (A_C x)`` (least
-    squares, LSQR), and the result is accepted when every row is at least
+    squares, one sparse LU of the regularised normal equations), and the
+    result is accepted when every row is at least
     ``-tol max(A x)`` and some row stays open.  The value is
     ``1^T A x / max(A x)``, a lower bound on the motion LP's.
 
@@ -731,7 +732,7 @@ def opening_motion(A: sp.csr_matrix, x, tol: float = LP_TOL):
     >>> import scipy.sparse as sp
     >>> A = sp.csr_matrix(np.array([[1.0, 0.0], [0.0, 1.0], [1.0, 1.0]]))
     >>> value, x = opening_motion(A, np.array([1.0, -1e-4]))  # the second row slightly negative: noise
-    >>> round(value, 6), np.round(x, 12).tolist()
+    >>> round(value, 6), (np.round(x, 12) + 0.0).tolist()
     (2.0, [1.0, 0.0])
     """
     if x is None or not len(x):
@@ -743,15 +744,21 @@ def opening_motion(A: sp.csr_matrix, x, tol: float = LP_TOL):
         return None, None
     for kappa in FARKAS_CLOSED_RTOLS:
         closed = np.flatnonzero(y <= kappa * top)
-        moved = x
-        if len(closed):
-            moved = x - scipy.sparse.linalg.lsqr(A[closed], y[closed], atol=1e-15, btol=1e-15,
-                                                 iter_lim=10 * A.shape[1])[0]
+        moved = x if not len(closed) else x - _least_squares(A[closed], y[closed])
         z = A @ moved
         largest = float(z.max(initial=0.0))
         if largest > 0 and z.min() >= -tol * largest:
             return float(z.sum() / largest), moved / largest
     return None, None
+
+
+def _least_squares(A: sp.csr_matrix, b: np.ndarray) -> np.ndarray:
+    """``argmin |A d - b|^2 + mu |d|^2`` with ``mu = 1e-12 |A^T A|_1``: nearly the least-norm least-squares
+    solution, by one sparse LU (LSQR took 7,685 iterations, 1.4 s, on a 497-block p4 patch's shut rows).  The
+    caller checks what it gives exactly, so the regularisation only decides how close it comes."""
+    gram = (A.T @ A).tocsc()
+    mu = 1e-12 * max(float(scipy.sparse.linalg.norm(gram, 1)), np.finfo(float).tiny)
+    return scipy.sparse.linalg.splu((gram + mu * sp.identity(A.shape[1], format="csc")).tocsc()).solve(A.T @ b)
 
 
 def _motion_lp(A: sp.csr_matrix, tol: float, budget: Budget | None = None):
