@@ -28,7 +28,8 @@ from interlock.verify.precision import PRECISION_FACTOR, Precision, block_precis
 from interlock.verify.matrix import InterlockingMatrix, interlocking_matrix
 from interlock.verify.validate import refuse_overlaps_without_contact, validate as check_overlaps
 
-__all__ = ["Verdict", "check", "beyond_first_order", "opening_motion", "contact_tolerances", "FARKAS_CLOSED_RTOLS", "STAGES", "RANK_RTOL", "RANK_CLEAR_RTOL", "GRAM_RESOLUTION", "GRAM_SURE_RTOL", "LP_TOL", "LP_SOLVERS",
+__all__ = ["Verdict", "check", "beyond_first_order", "opening_motion", "contact_tolerances", "FARKAS_CLOSED_RTOLS",
+           "PROJECTION_ROUNDS", "STAGES", "RANK_RTOL", "RANK_CLEAR_RTOL", "GRAM_RESOLUTION", "GRAM_SURE_RTOL", "LP_TOL", "LP_SOLVERS",
            "MOVING_RTOL", "DENSE_COLUMNS", "FIRST_KERNEL_PROBE", "COARSE_RATIO", "SOLVER_THREADS", "MAX_KERNEL_PROBE", "INVERSE_ITERATIONS"]
 
 #: A singular value at most ``RANK_RTOL * sigma_max`` is zero ...
@@ -47,6 +48,8 @@ LP_SOLVERS = ("clarabel", "highs")
 #: Rows of an interior-point motion below one of these fractions of its largest row are projected shut, tried
 #: from the finest up (:func:`opening_motion`): interior points leave shut rows at 1e-10 .. 1e-4 of the largest.
 FARKAS_CLOSED_RTOLS = (1e-6, 1e-5, 1e-4, 1e-3, 1e-2)
+#: Projections of the shut rows per threshold of :func:`opening_motion`.
+PROJECTION_ROUNDS = 2
 #: The stages of :func:`check`, in order, as reported to its ``progress`` callback and in ``timings``.
 STAGES = ("validate", "contacts", "matrix", "rank", "lp", "margin", "certify", "beyond")
 #: Up to this many columns the rank comes from a dense SVD; above, from block inverse iteration on A^T A.
@@ -724,7 +727,9 @@ def opening_motion(A: sp.csr_matrix, x, tol: float = LP_TOL):
     ``kappa max(A x)`` are projected shut, ``x <- x - A_C^+ (A_C x)`` (least
     squares, one sparse LU of the regularised normal equations), and the
     result is accepted when every row is at least
-    ``-tol max(A x)`` and some row stays open.  The value is
+    ``-tol max(A x)`` and some row stays open (up to
+    :data:`PROJECTION_ROUNDS` projections per threshold; last, the vector as
+    it came, if it passes unprojected).  The value is
     ``1^T A x / max(A x)``, a lower bound on the motion LP's.
 
     Examples
@@ -743,12 +748,20 @@ def opening_motion(A: sp.csr_matrix, x, tol: float = LP_TOL):
     if not top > 0:
         return None, None
     for kappa in FARKAS_CLOSED_RTOLS:
-        closed = np.flatnonzero(y <= kappa * top)
-        moved = x if not len(closed) else x - _least_squares(A[closed], y[closed])
-        z = A @ moved
-        largest = float(z.max(initial=0.0))
-        if largest > 0 and z.min() >= -tol * largest:
-            return float(z.sum() / largest), moved / largest
+        moved, z = x, y
+        for _ in range(PROJECTION_ROUNDS):  # a second round shuts what the first left slightly negative
+            closed = np.flatnonzero(z <= kappa * float(z.max(initial=0.0)))
+            if not len(closed):
+                break
+            moved = moved - _least_squares(A[closed], z[closed])
+            z = A @ moved
+            largest = float(z.max(initial=0.0))
+            if largest > 0 and z.min() >= -tol * largest:
+                return float(z.sum() / largest), moved / largest
+            if not largest > 0:
+                break
+    if y.min() >= -tol * top:  # no projection keeps it a motion, but it is one as it came
+        return float(y.sum() / top), x / top
     return None, None
 
 
