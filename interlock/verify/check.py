@@ -313,7 +313,7 @@ def _decide(assembly, frame, translational, certify, rank_rtol, lp_tol, contacts
     limits = contact_tolerances(found, precision, tolerance)
     # faces bent within the rounding the numbers show are planar as far as the input can tell; a bend beyond it
     # (even one computed float64 geometry might explain) may block a slide
-    bent = bent_contacts(found, contact_tolerances(found, precision, tolerance, bends=False, read=True))
+    bent = bent_contacts(found, contact_tolerances(found, precision, tolerance, bends=False))
     base = dict(frame=fixed, shape=A.shape, translational=translational, contacts=len(found),
                 bent_contacts=int(bent.sum()), tolerances=tolerances, timings=timings)
     if len(A.free) == 0:
@@ -483,8 +483,7 @@ def _too_coarse(assembly: Assembly, frame, precision: Precision) -> str | None:
             f"than its blocks: block {worst} is {assembly.block_sizes[worst]:.3g} across; {remedy}")
 
 
-def contact_tolerances(found, precision: Precision, tolerance=None, bends: bool = True,
-                       read: bool = False) -> np.ndarray:
+def contact_tolerances(found, precision: Precision, tolerance=None, bends: bool = True) -> np.ndarray:
     """One length per contact: how far the real faces may be from the modelled contact.
 
     ``tolerance`` given: that length for every contact.  Otherwise each
@@ -492,12 +491,12 @@ def contact_tolerances(found, precision: Precision, tolerance=None, bends: bool 
     rounding of its two blocks, plus twice the bend of faces bent within the
     tolerances), or, for contacts given by hand, the rounding of its blocks
     (:meth:`~interlock.verify.precision.Precision.contact_tolerance`).
-    ``bends=False``: the rounding alone; ``read=True``: the rounding the numbers show, without the allowance for
-    computed geometry (:meth:`~interlock.verify.precision.Precision.contact_tolerance`).
+    ``bends=False``: the rounding alone (what the numbers show, without the allowance for computed geometry:
+    :meth:`~interlock.verify.precision.Precision.contact_tolerance`).
     """
     if tolerance is not None:
         return np.full(len(found), float(tolerance))
-    rounding = np.array([precision.contact_tolerance(c.i, c.j, read) for c in found], dtype=float)
+    rounding = np.array([precision.contact_tolerance(c.i, c.j) for c in found], dtype=float)
     if not bends:
         return rounding
     own = np.array([np.nan if c.tolerance is None else c.tolerance for c in found], dtype=float)
@@ -542,7 +541,7 @@ def _unless_missed(verdict: Verdict, assembly: Assembly, precision: Precision, t
     reference = find_contacts(assembly, involving=verdict.moving, precision=precision)
     # the rounding alone: unless_missed adds each contact's bend itself, and judges slides across faces bent beyond it
     return unless_missed(verdict, assembly, reference,
-                         contact_tolerances(reference, precision, tolerance, bends=False, read=True))
+                         contact_tolerances(reference, precision, tolerance, bends=False))
 
 
 def _coarsest(found, A: InterlockingMatrix, limits: np.ndarray):

@@ -252,7 +252,9 @@ def _tolerances(assembly, rtol, angle_tol, area_rtol, gap, precision) -> "_Toler
         rtol = DEFAULT_CONTACT_RTOL
     if rtol is None:  # the local model: each block's rounding and size, nothing of the scene
         precision = block_precision(assembly) if precision is None else precision
-        rounding = PRECISION_FACTOR * np.asarray(precision.delta, dtype=float)
+        # the margin's rounding is what the numbers show; the allowance for computed geometry widens the search only
+        read = precision.delta if precision.read is None else precision.read
+        rounding = PRECISION_FACTOR * np.asarray(read, dtype=float)
         search = search_distances(assembly, precision)
         grouping = np.array([max(PRECISION_FACTOR * coordinate_precision(m.vertices)[0], SEARCH_RTOL * m.scale)
                              for m in assembly.meshes])

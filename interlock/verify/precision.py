@@ -67,11 +67,12 @@ class Precision:
     source: tuple[str, ...]
     read: np.ndarray | None = None
 
-    def contact_tolerance(self, i: int, j: int, read: bool = False) -> float:
+    def contact_tolerance(self, i: int, j: int, read: bool = True) -> float:
         """:data:`PRECISION_FACTOR` times the mean rounding of blocks ``i`` and ``j``.
 
-        ``read=True``: the rounding the numbers show alone (``read``), without the allowance for computed
-        float64 geometry: a face bent beyond it is bent as far as the input can tell.
+        ``read=True`` (default): the rounding the numbers show (``read``), without the allowance for computed
+        float64 geometry, which only widens the contact search: a face bent beyond it is bent as far as the
+        input can tell, and the margin is measured against it.  ``read=False``: ``delta``.
         """
         delta = self.delta if not read or self.read is None else self.read
         return PRECISION_FACTOR * 0.5 * float(delta[i] + delta[j])
