@@ -58,6 +58,35 @@ True or False (never None), equal to the float64 one (0 wrong), in at most
 twice its time (``ratio``).  The chart shows both verdicts' seconds against
 blocks per family, and the ratio.
 
+The **peer family** (:func:`run_peers`, ``scaling_peers.json`` and ``.png``;
+issue 40): "one block fixed" on peer-like matrices.  p4 patches (the
+``escher`` block above, radius 3 to 19.2: 137 to 4,781 blocks), p6 patches of
+the main paper's Fig. 1 block (radius 3 to 14.5: 229 to 4,726 blocks) and
+1 to 30 TopoLite bunnies (80 parts each) side by side, not touching.  Each
+assembly is checked with three frames, alternating in one process
+(``check(validate=False, time_limit=600)``, a fresh assembly per call,
+:data:`PEER_RUNS` runs, medians of the wall time): ``ring`` (the outer ring;
+bunny: parts 0 and 1 of every copy; interlocked), ``one`` (block 0; bunny:
+part 1 of the first copy) and ``few`` (:data:`FEW` ring blocks evenly spread,
+as in issue 40's 559-block peer; bunny: part 1 of every copy), neither
+interlocked.  ``ratios`` are the negative medians over the positive (target:
+at most 2); ``verdict_ratios`` the same for contacts through lp, without the
+margin that only a positive answer computes.  Each frame records its verdict:
+``interlocked``, ``status`` and ``tolerances["motion_from"]``.
+
+The **grid family** (:func:`run_grid`, ``scaling_grid.json`` and ``.png``):
+``side`` x ``side`` touching unit cubes (top and bottom rows fixed) against
+the RhomBlock hexagon of about as many blocks (ring fixed), 100 x 100 against
+n = 60 (10,800 blocks) at the largest size; one fresh process per size, the
+two alternating in it (up to :data:`GRID_RUNS` pairs within
+:data:`GRID_BUDGET` seconds), wall times and the peak resident set of each
+check.  Target: grid at most 2x the hexagon.  Separate cubes and the n-gon
+prism are in :mod:`benchmarks.memory`.
+
+``python -m benchmarks.scaling [--quick] [--float32 | --peers [p4,p6,bunny] |
+--grid] [--sizes ...]`` runs one family alone (with ``--sizes``, without
+replacing the recorded JSON).
+
 Reading the chart: one log-log panel of seconds against blocks per family,
 one line per stage (ours solid, naive dashed, the verdict in black), the
 exponent ``~N^k`` in each legend entry; a line that is steeper grows faster,
