@@ -451,7 +451,7 @@ PEER_FRAMES = {"ring": "positive: the outer ring fixed (bunny: parts 0 and 1 of 
 
 def run_peers(quick: bool = False, names=None, sizes=None) -> dict:
     """The peer family: per size, the negative verdicts ("one", "few") over the positive ("ring"); target <= 2."""
-    start, load = time.perf_counter(), load_average()
+    start, load, library = time.perf_counter(), load_average(), library_state()
     families = {}
     with limited_blas():
         _peer_row(PEER_FAMILIES[0], PEER_FAMILIES[0].quick_sizes[0], runs=1)  # warm-up (imports, first calls)
@@ -469,6 +469,7 @@ def run_peers(quick: bool = False, names=None, sizes=None) -> dict:
                    "seconds": "wall time of check(assembly, validate=False, time_limit=...), median of the runs",
                    "frames": PEER_FRAMES},
         "load_average_at_start": load,
+        "library": library,
         "families": families,
         "summary": {"sizes": len(every),
                     "largest_ratio": max((r for row in every for r in row["ratios"].values()), default=None),
@@ -487,6 +488,16 @@ def run_peers(quick: bool = False, names=None, sizes=None) -> dict:
         write_json("scaling_peers", payload)
         _peers_chart(payload)
     return payload
+
+
+def library_state() -> dict:
+    """The commit of the library measured, and its files changed since (a shared working tree), at the start."""
+    def git(*args):
+        done = subprocess.run(["git", *args], cwd=ROOT, capture_output=True, text=True)
+        return done.stdout.strip() if done.returncode == 0 else None
+
+    changed = git("status", "--porcelain", "--", "interlock")
+    return {"commit": git("rev-parse", "HEAD"), "changed": changed.splitlines() if changed else []}
 
 
 def _peer_row(family: PeerFamily, size, runs: int) -> dict:
