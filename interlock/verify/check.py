@@ -24,7 +24,7 @@ from interlock.verify.budget import Budget, TimeLimitReached
 from interlock.verify.contacts import PRESS_RTOL, Contact, contacts as find_contacts, model_contacts, search_distances
 from interlock.verify.load_paths import load_path_bound
 from interlock.verify.margin import Margin, assess
-from interlock.verify.precision import PRECISION_FACTOR, Precision, block_precision
+from interlock.verify.precision import COMPUTED_ULPS, PRECISION_FACTOR, Precision, block_precision
 from interlock.verify.matrix import InterlockingMatrix, interlocking_matrix
 from interlock.verify.validate import refuse_overlaps_without_contact, validate as check_overlaps
 
@@ -520,7 +520,10 @@ def _with_play(verdict: Verdict, A: InterlockingMatrix, found) -> Verdict:
     :func:`~interlock.verify.load_paths.load_path_bound` (with ``eps = g``) prove ``|x|_inf <= B`` for every
     such motion: no block turns by more than ``B`` radians nor moves by more than ``B L``.
     """
-    gaps = np.array([c.separation for c in found], dtype=float)
+    # a gap within the last places that computed float64 geometry strays by is no gap
+    last_place = COMPUTED_ULPS * np.finfo(float).eps
+    gaps = np.array([c.separation if c.separation > last_place * float(np.abs(c.vertices).max(initial=1.0)) else 0.0
+                     for c in found], dtype=float)
     if verdict.interlocked is not True or not len(A.row_contact) or not gaps[A.row_contact].any():
         return verdict
     row_gaps = gaps[A.row_contact]
