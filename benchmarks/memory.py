@@ -36,7 +36,8 @@ from pathlib import Path
 
 import numpy as np
 
-from benchmarks.common import BLAS_THREADS, add_arguments, load_average, pyplot, save_chart, use_results_folder, write_json
+from benchmarks.common import (BLAS_THREADS, add_arguments, load_average, pyplot, save_chart, use_results_folder,
+                               write_json)
 
 ROOT = Path(__file__).resolve().parents[1]
 MB = 1e6
@@ -182,7 +183,8 @@ def _chart(payload: dict) -> None:
     for (name, family), colour in zip(payload["families"].items(), ("C0", "C1")):
         rows = [row for row in family["rows"] if "error" not in row]
         sizes = [row["size"] for row in rows]
-        grid[0].loglog(sizes, [row["seconds"] for row in rows], "o-", color=colour, label=f"{name} (x: {family['size']})")
+        grid[0].loglog(sizes, [row["seconds"] for row in rows], "o-", color=colour,
+                       label=f"{name} (x: {family['size']})")
         grid[1].loglog(sizes, [row["peak_mb"] for row in rows], "o-", color=colour, label=f"{name}: process peak")
         grid[1].loglog(sizes, [row["peak_above_start_mb"] for row in rows], "s--", color=colour,
                        label=f"{name}: above the start of check")
