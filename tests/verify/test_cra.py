@@ -70,11 +70,20 @@ def _no_coulomb(monkeypatch):
                         lambda *args, **kwargs: cra_coulomb.FixedPoint(None, 0, None, None, ()))
 
 
+def _undecided_milp(monkeypatch):
+    """The MILP undecided on every machine: at one node, newer HiGHS releases decide this arch at the root."""
+    from interlock.verify.statics import cra_milp
+
+    monkeypatch.setattr(cra_milp, "relaxation",
+                        lambda *args, **kwargs: "HiGHS did not decide the MILP within milp_nodes = 1 nodes")
+
+
 def test_an_undecided_milp_ends_in_the_coulomb_fixed_point(monkeypatch):
     from interlock.blocks import semicircular_arch
     from interlock.verify.statics import cra_ipopt
 
     monkeypatch.setattr(cra_ipopt, "available", lambda: False)  # convex solves only: no CasADi needed
+    _undecided_milp(monkeypatch)
     arch = semicircular_arch(8)  # tilted out of its plane, no quick answer and no MILP answer in 60 s either
     gravity = tilted_gravity("x", 4.0)
     result = cra(arch, math.tan(math.radians(43)), gravity=gravity, milp_nodes=1)
@@ -89,6 +98,7 @@ def test_an_undecided_milp_ends_in_a_local_solve_from_where_the_arch_settles(mon
 
     monkeypatch.setattr(cra_ipopt, "available", lambda: False)  # SLSQP alone, as without CasADi
     _no_coulomb(monkeypatch)
+    _undecided_milp(monkeypatch)
     arch = semicircular_arch(8)
     gravity = tilted_gravity("x", 4.0)
     result = cra(arch, math.tan(math.radians(43)), gravity=gravity, milp_nodes=1)
@@ -101,6 +111,7 @@ def test_an_undecided_milp_ends_in_ipopt_on_problem_11_when_casadi_is_installed(
     from interlock.blocks import semicircular_arch
 
     _no_coulomb(monkeypatch)
+    _undecided_milp(monkeypatch)
     arch = semicircular_arch(8)
     gravity = tilted_gravity("x", 4.0)
     result = cra(arch, math.tan(math.radians(43)), gravity=gravity, milp_nodes=1)
