@@ -164,10 +164,13 @@ def escher_patch(radius: float):
 
 @dataclass(frozen=True)
 class Family:
-    """Assemblies of growing size: ``generate(size)`` for each of ``sizes`` (``quick_sizes`` for tests)."""
+    """Assemblies of growing size: ``generate(size)`` for each of ``sizes`` (``quick_sizes`` for tests).
+
+    ``generate`` gives an :class:`Assembly`, or for the peer families (assembly, {frame name: fixed blocks}).
+    """
 
     name: str
-    generate: Callable[[object], Assembly]
+    generate: Callable[[object], object]
     size_name: str
     description: str
     sizes: tuple
@@ -376,18 +379,6 @@ BUNNY_PARTS, BUNNY_RING, BUNNY_ONE = 80, (0, 1), (1,)
 BUNNY_GAP = 0.5
 
 
-@dataclass(frozen=True)
-class PeerFamily:
-    """Peer-like assemblies of growing size: ``generate(size)`` gives (assembly, {frame name: fixed blocks})."""
-
-    name: str
-    generate: Callable[[object], tuple]
-    size_name: str
-    description: str
-    sizes: tuple
-    quick_sizes: tuple
-
-
 def _ring_frames(assembly: Assembly) -> tuple:
     ring = assembly.boundary()
     few = tuple(ring[k] for k in np.linspace(0, len(ring), FEW, endpoint=False).astype(int))
@@ -436,11 +427,11 @@ def bunny_peers(copies: int) -> tuple:
 
 
 PEER_FAMILIES = (
-    PeerFamily("p4", p4_peers, "radius", "p4 Escher patch (edges 0, 1 deformed)", (3, 4, 5, 6, 8, 9, 12, 19.2),
+    Family("p4", p4_peers, "radius", "p4 Escher patch (edges 0, 1 deformed)", (3, 4, 5, 6, 8, 9, 12, 19.2),
                (1, 2)),
-    PeerFamily("p6", p6_peers, "radius", "p6 Escher patch (main paper Fig. 1 block)", (3, 4, 5, 6, 8, 10, 14.5),
+    Family("p6", p6_peers, "radius", "p6 Escher patch (main paper Fig. 1 block)", (3, 4, 5, 6, 8, 10, 14.5),
                (1,)),
-    PeerFamily("bunny", bunny_peers, "copies", "TopoLite bunny (80 parts), copies side by side",
+    Family("bunny", bunny_peers, "copies", "TopoLite bunny (80 parts), copies side by side",
                (1, 4, 16, 30), (1,)),
 )
 #: What each frame is, for the JSON.
@@ -500,7 +491,7 @@ def library_state() -> dict:
     return {"commit": git("rev-parse", "HEAD"), "changed": changed.splitlines() if changed else []}
 
 
-def _peer_row(family: PeerFamily, size, runs: int) -> dict:
+def _peer_row(family: Family, size, runs: int) -> dict:
     """One size: every frame ``runs`` times on a fresh assembly, frames alternating (rotated each run)."""
     names = list(PEER_FRAMES)
     seconds = {name: [] for name in names}
