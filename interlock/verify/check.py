@@ -24,13 +24,14 @@ from interlock.verify.budget import Budget, TimeLimitReached
 from interlock.verify.contacts import PRESS_RTOL, Contact, contacts as find_contacts, model_contacts, search_distances
 from interlock.verify.load_paths import load_path_bound
 from interlock.verify.margin import Margin, assess
-from interlock.verify.precision import COMPUTED_ULPS, PRECISION_FACTOR, Precision, block_precision
+from interlock.verify.precision import PRECISION_FACTOR, Precision, block_precision
 from interlock.verify.matrix import InterlockingMatrix, interlocking_matrix
 from interlock.verify.validate import refuse_overlaps_without_contact, validate as check_overlaps
 
 __all__ = ["Verdict", "check", "beyond_first_order", "opening_motion", "contact_tolerances", "FARKAS_CLOSED_RTOLS",
-           "PROJECTION_ROUNDS", "STAGES", "RANK_RTOL", "RANK_CLEAR_RTOL", "GRAM_RESOLUTION", "GRAM_SURE_RTOL", "LP_TOL", "LP_SOLVERS",
-           "MOVING_RTOL", "DENSE_COLUMNS", "FIRST_KERNEL_PROBE", "COARSE_RATIO", "SOLVER_THREADS", "MAX_KERNEL_PROBE", "INVERSE_ITERATIONS"]
+           "PROJECTION_ROUNDS", "STAGES", "RANK_RTOL", "RANK_CLEAR_RTOL", "GRAM_RESOLUTION", "GRAM_SURE_RTOL", "LP_TOL",
+           "LP_SOLVERS", "MOVING_RTOL", "DENSE_COLUMNS", "FIRST_KERNEL_PROBE", "COARSE_RATIO", "SOLVER_THREADS",
+           "MAX_KERNEL_PROBE", "INVERSE_ITERATIONS"]
 
 #: A singular value at most ``RANK_RTOL * sigma_max`` is zero ...
 RANK_RTOL = 1e-9
@@ -520,10 +521,7 @@ def _with_play(verdict: Verdict, A: InterlockingMatrix, found) -> Verdict:
     :func:`~interlock.verify.load_paths.load_path_bound` (with ``eps = g``) prove ``|x|_inf <= B`` for every
     such motion: no block turns by more than ``B`` radians nor moves by more than ``B L``.
     """
-    # a gap within the last places that computed float64 geometry strays by is no gap
-    last_place = COMPUTED_ULPS * np.finfo(float).eps
-    gaps = np.array([c.separation if c.separation > last_place * float(np.abs(c.vertices).max(initial=1.0)) else 0.0
-                     for c in found], dtype=float)
+    gaps = np.array([c.separation for c in found], dtype=float)
     if verdict.interlocked is not True or not len(A.row_contact) or not gaps[A.row_contact].any():
         return verdict
     row_gaps = gaps[A.row_contact]

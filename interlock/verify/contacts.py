@@ -13,7 +13,8 @@ from interlock.blocks.assembly import NEIGHBOUR_RTOL, Assembly
 from interlock.blocks.contact import Contact, ContactError
 from interlock.verify.facets import (DEFAULT_ANGLE_TOL, DEFAULT_CONTACT_RTOL, PLANAR_ULPS, TINY, Facets, FacetTable,
                                      check_tolerance, clean_polygons, facets)
-from interlock.verify.precision import BEND_FACTOR, PRECISION_FACTOR, block_precision, coordinate_precision
+from interlock.verify.precision import (BEND_FACTOR, COMPUTED_ULPS, PRECISION_FACTOR, block_precision,
+                                       coordinate_precision)
 
 __all__ = [
     "Contact",
@@ -215,8 +216,8 @@ def contacts(assembly: Assembly, rtol: float | None = None, angle_tol: float = D
     relative = relative[kinds]
     stand_in = Assembly(assembly.meshes, np.column_stack([assembly.types[i], assembly.types[j]]).ravel(),
                         np.stack([np.broadcast_to(np.eye(4), relative.shape), relative], axis=1).reshape(-1, 4, 4))
-    widest = [np.zeros(2 * len(kinds)) for _ in range(3)]
-    for k, values in enumerate((local.search, local.rounding, local.area)):
+    widest = [np.zeros(2 * len(kinds)) for _ in range(4)]
+    for k, values in enumerate((local.search, local.rounding, local.area, local.coincide)):
         np.maximum.at(widest[k], 2 * kind_of, values[pairs[:, 0]])
         np.maximum.at(widest[k], 2 * kind_of + 1, values[pairs[:, 1]])
     stand_in_tolerances = _Tolerances(*widest, local.grouping, local.angle, local.gap, local.tilt)
@@ -256,24 +257,31 @@ def _tolerances(assembly, rtol, angle_tol, area_rtol, gap, precision) -> "_Toler
         read = precision.delta if precision.read is None else precision.read
         rounding = PRECISION_FACTOR * np.asarray(read, dtype=float)
         search = search_distances(assembly, precision)
-        grouping = np.array([max(PRECISION_FACTOR * coordinate_precision(m.vertices)[0], SEARCH_RTOL * m.scale)
-                             for m in assembly.meshes])
+        by_type = (precision.by_type if precision.by_type is not None
+                   else [coordinate_precision(m.vertices)[0] for m in assembly.meshes])
+        grouping = np.array([max(PRECISION_FACTOR * d, SEARCH_RTOL * m.scale)
+                             for d, m in zip(by_type, assembly.meshes)])
         area_size = assembly.block_sizes
     else:  # one tolerance relative to the model size, as asked
         rounding = search = np.full(len(assembly), rtol * scale)
         grouping = np.full(len(assembly.meshes), rtol * scale)
         area_size = np.full(len(assembly), scale)
-    return _Tolerances(search, rounding, area_rtol * area_size**2, grouping, angle_tol, gap * scale, rtol is None)
+    # faces closer than the last places computed float64 strays by, at the block's own coordinates, coincide
+    coincide = COMPUTED_ULPS * np.finfo(float).eps * np.abs(assembly.bounds).max(axis=(1, 2))
+    return _Tolerances(search, rounding, area_rtol * area_size**2, coincide, grouping, angle_tol, gap * scale,
+                       rtol is None)
 
 
 @dataclass(frozen=True)
 class _Tolerances:
-    """The contact search's tolerances: per block the search distance, the rounding and the smallest area kept;
-    per mesh type the facet grouping distance; the angle and the absolute gap."""
+    """The contact search's tolerances: per block the search distance, the rounding, the smallest area kept and
+    the distance below which faces coincide (no gap); per mesh type the facet grouping distance; the angle, the
+    absolute gap, and whether each facet's angle tolerance grows with its distance tolerance (the local model)."""
 
     search: np.ndarray
     rounding: np.ndarray
     area: np.ndarray
+    coincide: np.ndarray
     grouping: np.ndarray
     angle: float
     gap: float
@@ -482,8 +490,8 @@ def _overlaps(table: FacetTable, gi, gj, atol, tolerances: _Tolerances) -> tuple
         pressed = gap == 0 and deepest > atol[k[p]] and apart <= press[p]
         if apart > atol[k[p]] + gap and not pressed:  # open: farther apart than the tolerance of these faces
             continue
-        # exact coincidence up to the coordinates' last place; beyond it the faces are a gap apart
-        coincide = PLANAR_ULPS * np.finfo(float).eps * float(np.abs(vertices).max(initial=1.0))
+        # coincidence up to the last places of the blocks' world coordinates; beyond it the faces are a gap apart
+        coincide = max(tolerances.coincide[block_i[p]], tolerances.coincide[block_j[p]])
         separation = max(0.0, float(distance.max())) if apart > coincide and not pressed else 0.0
         if gap > 0:
             separation = apart if apart > atol[k[p]] else 0.0

@@ -61,11 +61,13 @@ class Precision:
     "computed float64" (placed by a transform).  ``read[b]`` is the rounding
     the numbers alone show (for float64, one unit in the last place), before
     the allowance of :data:`COMPUTED_ULPS` for computed geometry.
+    ``by_type[t]`` is the rounding of mesh ``t`` in its own coordinates.
     """
 
     delta: np.ndarray
     source: tuple[str, ...]
     read: np.ndarray | None = None
+    by_type: np.ndarray | None = None
 
     def contact_tolerance(self, i: int, j: int, read: bool = True) -> float:
         """:data:`PRECISION_FACTOR` times the mean rounding of blocks ``i`` and ``j``.
@@ -177,7 +179,7 @@ def block_precision(assembly) -> Precision:
         for b in np.flatnonzero(placed):
             if source[b] in ("grid", "float64"):
                 source[b] = "computed float64"
-    return Precision(delta, tuple(source), read)
+    return Precision(delta, tuple(source), read, np.array([d for d, _ in per_type], dtype=float))
 
 
 def _cut_to(x: np.ndarray, quantum: float):
@@ -185,6 +187,7 @@ def _cut_to(x: np.ndarray, quantum: float):
     with np.errstate(all="ignore"):
         units = x / quantum
     rounded = np.round(units)
-    if np.all(np.isfinite(units)) and np.all(np.abs(units - rounded) <= 1e-6) and np.abs(rounded).max(initial=0.0) < 2.0**52:
+    if (np.all(np.isfinite(units)) and np.all(np.abs(units - rounded) <= 1e-6)
+            and np.abs(rounded).max(initial=0.0) < 2.0**52):
         return rounded
     return None
