@@ -1,0 +1,156 @@
+"""What the commands share: reading block lists, numbers and mesh files, writing an assembly, the
+``--time-limit`` clock."""
+
+from __future__ import annotations
+
+import math
+import time
+
+from interlock.errors import InterlockError
+
+EXIT_BAD_INPUT = 2
+MOVING_SHOWN = 12
+
+#: The formats ``verify``, ``stability`` and ``convert`` read (interlock.blocks.meshfiles; any other trimesh reads).
+MESH_FORMATS = ("OBJ, STL, PLY, GLB/GLTF, 3MF, OFF, VTU, XDMF, Rhino 3DM, COMPAS assembly JSON (and other formats "
+                "trimesh reads); the files interlock generate writes keep their blocks and frame")
+
+
+#: The suffixes ``generate -o`` and ``convert`` write (interlock.gallery.export.FORMATS).
+OUTPUT_SUFFIXES = (".stl", ".obj", ".ply", ".glb", ".3mf", ".vtu", ".xdmf", ".3dm", ".json")
+
+
+def output_arguments(parser) -> None:
+    parser.add_argument("-o", "--output", required=True, metavar="FILE",
+                        help=f"output file: {' '.join(OUTPUT_SUFFIXES)}, or .png for a picture")
+    parser.add_argument("--exploded", type=float, default=0.0, help="move blocks apart by this factor (default 0)")
+    parser.add_argument("--max-blocks", type=int, default=None, metavar="N",
+                        help="refuse to make more than N blocks (default 100,000; counted before anything is made)")
+
+
+def lattice_arguments(parser) -> None:
+    parser.add_argument("--a", type=float, default=1.0, help="cell edge a (default 1)")
+    parser.add_argument("--b", type=float, default=None, help="cell edge b (default: a)")
+    parser.add_argument("--gamma", type=float, default=None,
+                        help="cell angle in degrees (default: the crystal system's)")
+
+
+def time_limit(seconds, started: float) -> float | None:
+    """What is left of ``--time-limit`` (``seconds``) after what the command has spent since ``started`` (imports,
+    reading the files), at least a millisecond; ``None`` without a limit.  A bad value is refused."""
+    if seconds is None:
+        return None
+    if not seconds > 0 or math.isnan(seconds):
+        raise InterlockError(f"--time-limit must be a number of seconds > 0, got {seconds:g}")
+    return max(seconds - (time.perf_counter() - started), 1e-3)
+
+
+#: How ``verify`` names where the frame came from (``Assembly.info["frame_from"]``).
+FRAME_FROM = {"argument": "--fixed", "file": "the file", "upstream examples": "the upstream examples",
+               "none": "none"}
+
+
+def frame_text(frame, origin) -> str:
+    """'[0, 8] (from --fixed)', '24 blocks (from the file)' or '[] (no --fixed given, none stored)'."""
+    source = FRAME_FROM.get(origin, "none")
+    if source == "none":
+        return "[] (no --fixed given, none stored)"
+    shown = str(list(frame)) if len(frame) <= MOVING_SHOWN else f"{len(frame)} blocks"
+    return f"{shown} (from {source})"
+
+
+def block_limit(args) -> dict:
+    """``max_blocks`` for a generator, from ``--max-blocks`` (its default when not given)."""
+    if args.max_blocks is None:
+        return {}
+    if args.max_blocks < 1:
+        raise InterlockError(f"--max-blocks must be at least 1, got {args.max_blocks}")
+    return {"max_blocks": args.max_blocks}
+
+
+def bar_progress(bar):
+    """A ``progress(done, total)`` callback that moves a tqdm bar."""
+    def advance(done, total):
+        bar.total = total
+        bar.n = done + 1
+        bar.refresh()
+    return advance
+
+
+def write_assembly(assembly, args) -> int:
+    from pathlib import Path
+
+    from interlock.gallery import export, render
+
+    from tqdm import tqdm
+
+    if Path(args.output).suffix.lower() == ".png":
+        path = render(assembly, args.output, exploded=args.exploded)
+    else:
+        with tqdm(desc=f"writing {Path(args.output).name}", unit="block", disable=None, leave=False) as bar:
+            path = export(assembly, args.output, exploded=args.exploded, progress=bar_progress(bar))
+    print(f"wrote {path}: {len(assembly)} blocks, {len(assembly.frame)} in the frame")
+    return 0
+
+
+def edge_points(text: str):
+    """'0:0.25,0.1;0.4,0.2' -> (0, [(0.25, 0.1), (0.4, 0.2)])."""
+    edge, colon, rest = text.partition(":")
+    if not colon or not edge.strip().isdigit():
+        raise InterlockError(f"cannot read --deform {text!r}: use EDGE:X,Y[;X,Y...], e.g. 0:0.25,0.1")
+    points = [numbers(point, float, "--deform") for point in rest.split(";") if point.strip()]
+    if any(len(p) != 2 for p in points):
+        raise InterlockError(f"cannot read --deform {text!r}: every point needs two coordinates X,Y")
+    return int(edge), points
+
+
+def numbers(text: str, kind, flag: str) -> list:
+    try:
+        return [kind(part) for part in text.split(",")]
+    except ValueError:
+        raise InterlockError(f"cannot read {flag} {text!r}: expected comma-separated numbers") from None
+
+
+def load(paths, fixed, progress=None):
+    """``Assembly.load`` with ``--fixed`` read as block indices in every format.  The library reads a COMPAS
+    file's frame as node keys (what its ``is_support`` marks name); a CLI user counts blocks, as the output
+    does, so for ``.json`` the indices are applied after loading."""
+    from pathlib import Path
+
+    from interlock.blocks import Assembly
+
+    frame = None if fixed is None else indices(fixed)
+    if frame is None or not isinstance(paths, (str, Path)) or Path(paths).suffix.lower() != ".json":
+        return Assembly.load(paths, frame=frame, progress=progress)
+    assembly = Assembly.load(paths, progress=progress)
+    outside = [k for k in frame if k >= len(assembly)]
+    if outside:
+        raise InterlockError(f"--fixed names block {outside[0]}, but {Path(paths).name} holds {len(assembly)} blocks "
+                             f"(indices 0-{len(assembly) - 1}; --fixed counts blocks in file order, not node keys)")
+    chosen = assembly.with_frame(sorted(set(frame)))
+    chosen.info["frame_from"] = "argument"
+    return chosen
+
+
+#: Block indices above this are refused while reading ``--fixed`` (before a range is spelled out in memory).
+LARGEST_INDEX = 10_000_000
+
+
+def indices(text: str) -> list[int]:
+    """'0,1,4-6' -> [0, 1, 4, 5, 6]."""
+    out = []
+    for part in filter(None, (p.strip() for p in text.split(","))):
+        low, dash, high = (s.strip() for s in part.partition("-"))
+        if not low.isdigit() or (dash and not high.isdigit()):
+            raise InterlockError(f"cannot read block list {text!r}: use indices and ranges such as 0,1 or 0-3,7")
+        if max(int(low), int(high) if dash else 0) > LARGEST_INDEX:
+            raise InterlockError(f"cannot read block list {text!r}: {part} reaches beyond block {LARGEST_INDEX:,}; "
+                                 f"give indices of the file's blocks")
+        if dash and int(high) < int(low):
+            raise InterlockError(f"cannot read block list {text!r}: the range {part} runs backwards; write it "
+                                 f"{int(high)}-{int(low)}")
+        out += list(range(int(low), int(high) + 1)) if dash else [int(low)]
+    if not out and text.strip():  # "" is an explicit empty frame; "," names nothing by mistake
+        raise InterlockError(f"cannot read block list {text!r}: it names no block; use indices and ranges such as "
+                             "0,1 or 0-3,7")
+    return out

@@ -1,0 +1,97 @@
+"""``interlock verify``: whether the blocks of mesh files interlock."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+
+from interlock.cli.common import (FRAME_FROM, MESH_FORMATS, MOVING_SHOWN, frame_text, load,
+                                  time_limit)
+
+
+def add_parser(commands) -> None:
+    verify = commands.add_parser(
+        "verify", help="decide whether blocks from mesh files interlock (LP + rank, Def. 3.3)",
+        description="Decide whether the blocks in the given mesh files interlock with the fixed blocks as frame. "
+                    "Give one file per block (numbered from 0 in the order given) or one file holding all blocks. "
+                    "The frame is --fixed if given, else the one the files store (interlock generate writes it "
+                    "into every format), else none; the output says which.",
+        epilog="examples:\n  interlock generate wallpaper p4 --deform 0:0.25,0.1 -o p4.vtu\n"
+               "  interlock verify p4.vtu                 (the frame stored in p4.vtu)\n"
+               "  interlock verify p4.vtu --fixed 0-3,7   (another frame)",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    verify.add_argument("paths", nargs="+", help=f"mesh files: {MESH_FORMATS}")
+    verify.add_argument("--fixed", default=None, metavar="LIST",
+                        help="frame: block indices, e.g. 0,1 or 0-3,7 (default: the frame stored in the file, "
+                             "if any, else none)")
+    verify.add_argument("--translational", action="store_true", help="translations only")
+    verify.add_argument("--certify", action="store_true", help="re-check the verdict rigorously")
+    verify.add_argument("--order", type=int, choices=(1, 2), default=1,
+                        help="2: take a verdict that is not 'interlocked' to second order and try the motion "
+                             "as a finite one (default 1: first order)")
+    verify.add_argument("--frames", metavar="FOLDER",
+                        help="with --order 2: write a finite motion shown into FOLDER, frame by frame "
+                             "(STL, and PNG with the plot extra)")
+    verify.add_argument("--time-limit", type=float, default=None, metavar="SECONDS",
+                        help="seconds for the whole command (reading the files included); past it the answer is "
+                             "'inconclusive: time limit reached in <stage>' (default: no limit)")
+    verify.add_argument("--json", action="store_true", help="print JSON instead of text")
+    verify.set_defaults(run=run)
+
+
+def run(args) -> int:
+    started = time.perf_counter()
+    time_limit(args.time_limit, started)
+    from interlock.verify import check
+
+    from tqdm import tqdm
+
+    from interlock.verify.check import STAGES
+
+    paths = args.paths[0] if len(args.paths) == 1 else args.paths
+    assembly = load(paths, args.fixed)
+    stages = [s for s in STAGES if (s != "certify" or args.certify) and (s != "beyond" or args.order == 2)]
+    with tqdm(total=len(stages), desc="verify", unit="stage", disable=None, leave=False) as bar:
+        def announce(stage):
+            bar.set_description(f"verify: {stage}")
+            bar.update(1)
+
+        limit = {} if args.time_limit is None else {"time_limit": time_limit(args.time_limit, started)}
+        verdict = check(assembly, translational=args.translational, certify=args.certify, progress=announce,
+                        order=args.order, **limit)
+    frames = []
+    if args.frames and verdict.finite_motion is not None and verdict.finite_motion.shown:
+        import importlib.util
+
+        from interlock.gallery.motion import export_motion
+
+        frames = export_motion(assembly, verdict.finite_motion, args.frames)
+        if importlib.util.find_spec("matplotlib") is not None:  # pictures too, with the plot extra
+            frames += export_motion(assembly, verdict.finite_motion, args.frames, format="png")
+    if args.json:
+        record = verdict.to_dict()
+        record["blocks"] = [str(label) for label in assembly.labels]
+        record["frame_from"] = FRAME_FROM.get(assembly.info.get("frame_from"), "none")
+        print(json.dumps(record, indent=2))
+        return 0
+    print(verdict)
+    print(f"blocks: {len(assembly)}, frame: {frame_text(verdict.frame, assembly.info.get('frame_from'))}, "
+          f"contacts: {verdict.contacts}")
+    if verdict.moving:
+        shown = ", ".join(f"{b} ({assembly.labels[b]})" for b in verdict.moving[:MOVING_SHOWN])
+        more = f" and {len(verdict.moving) - MOVING_SHOWN} more" if len(verdict.moving) > MOVING_SHOWN else ""
+        print(f"moving blocks: {shown}{more}")
+    if verdict.stress is not None and verdict.interlocked:
+        print(f"self-stress: {len(verdict.stress)} positive weights, smallest {verdict.stress.min():.3g}")
+    if verdict.second_order is not None:
+        print(verdict.second_order)
+    if verdict.finite_motion is not None:
+        print(f"finite motion: {verdict.finite_motion.message}")
+        if frames:
+            kinds = " and ".join(sorted({p.suffix[1:].upper() for p in frames}))
+            print(f"frames of the motion: {len(frames)} {kinds} files in {args.frames}")
+    timings = ", ".join(f"{name} {seconds:.3f}s" for name, seconds in verdict.timings.items())
+    print(f"timings: {timings}")
+    return 0
