@@ -10,10 +10,6 @@ from dataclasses import dataclass, field
 from numbers import Real
 
 import numpy as np
-import scipy.linalg
-import scipy.optimize
-import scipy.sparse as sp
-import scipy.sparse.linalg
 from threadpoolctl import threadpool_limits
 
 from interlock.blocks.assembly import Assembly
@@ -21,6 +17,10 @@ from interlock.errors import InterlockError
 from interlock.verify.admissible import (MOVING_RTOL, bent_contacts, moving_names, rigid_across_bends, unless_bent,
                                          unless_missed)
 from interlock.verify.budget import Budget, TimeLimitReached
+from interlock.verify.first_order import (DENSE_COLUMNS, FARKAS_CLOSED_RTOLS, FIRST_KERNEL_PROBE, GRAM_RESOLUTION,
+                                         GRAM_SURE_RTOL, INVERSE_ITERATIONS, LP_TOL, MAX_KERNEL_PROBE,
+                                         PROJECTION_ROUNDS, RANK_CLEAR_RTOL, SOLVER_THREADS, matrix_rank,
+                                         motion_lp, opening_motion, positive_stress)
 from interlock.verify.contacts import PRESS_RTOL, Contact, contacts as find_contacts, model_contacts, search_distances
 from interlock.verify.load_paths import load_path_bound
 from interlock.verify.margin import Margin, assess
@@ -35,40 +35,14 @@ __all__ = ["Verdict", "check", "beyond_first_order", "opening_motion", "contact_
 
 #: A singular value at most ``RANK_RTOL * sigma_max`` is zero ...
 RANK_RTOL = 1e-9
-#: ... one at least ``RANK_CLEAR_RTOL * sigma_max`` is not; in between the rank is inconclusive.
-RANK_CLEAR_RTOL = 1e-6
-#: The sparse path works with A^T A, which resolves singular values down to about this (relative).
-GRAM_RESOLUTION = 1e-7
-#: A smallest singular value of A^T A at least this (relative) settles full rank without the dense SVD.
-GRAM_SURE_RTOL = 1e-4
-#: LP feasibility and optimality tolerance (entries of A are O(1)).
-LP_TOL = 1e-7
 #: Solvers for the stress LP. Clarabel (direct sparse LDL^T, feasibility form) took 24 s on the stress LP of a
 #: 4,800-block RhomBlock hexagon where HiGHS' interior-point method took 206 s; HiGHS is the fallback.
 LP_SOLVERS = ("clarabel", "highs")
-#: Rows of an interior-point motion below one of these fractions of its largest row are projected shut, tried
-#: from the finest up (:func:`opening_motion`): interior points leave shut rows at 1e-10 .. 1e-4 of the largest.
-FARKAS_CLOSED_RTOLS = (1e-6, 1e-5, 1e-4, 1e-3, 1e-2)
-#: Projections of the shut rows per threshold of :func:`opening_motion`.
-PROJECTION_ROUNDS = 2
 #: The stages of :func:`check`, in order, as reported to its ``progress`` callback and in ``timings``.
 STAGES = ("validate", "contacts", "matrix", "rank", "lp", "margin", "certify", "beyond")
-#: Up to this many columns the rank comes from a dense SVD; above, from block inverse iteration on A^T A.
-DENSE_COLUMNS = 1200
-#: The sparse path looks for at most this many zero singular values (the kernel dimension is then a lower bound).
-MAX_KERNEL_PROBE = 256
-#: Threads for BLAS and Clarabel in the rank and LP stages.  On 2 shared cores with another job running, one
-#: thread made the stress LP of a 4,800-block RhomBlock hexagon 2.5x faster (21-25 s -> 8.5 s) and a dense rank
-#: of 241 blocks 60x faster (8.0 s -> 0.13 s); on an idle machine the two settings are within noise.
-SOLVER_THREADS = 1
-#: The sparse path starts with this many kernel directions; it doubles them only where the whole kernel is needed
-#: (bent or given contacts).  On a 100 x 100 grid of cubes (kernel about 9,800) probing 256 took 39 s.
-FIRST_KERNEL_PROBE = 12
 #: An input whose tolerance reaches this share of a contact's size (the square root of its area) is too coarse to
 #: decide where the margin does not: the 4-digit bunny's faces are bent by 0.0036 on contacts 0.06 across.
 COARSE_RATIO = 0.01
-#: Inverse-iteration sweeps of the sparse rank test (each gains a factor shift / sigma_min^2 on the kernel).
-INVERSE_ITERATIONS = 4
 
 
 @dataclass(frozen=True)
@@ -124,6 +98,10 @@ class Verdict:
         exact_only = self.margin is not None and math.isfinite(self.margin.lower)  # the tolerance matters
         cert = (", certified" + (" for the exact input only" if exact_only else "")) if self.certified else ""
         return f"{word}{cert}: {self.status} (A {self.shape[0]}x{self.shape[1]}, rank {self.rank})"
+
+    def __bool__(self):
+        raise TypeError("the truth value of a Verdict is ambiguous: it may be inconclusive; use verdict.interlocked "
+                        "(True, False or None), e.g. `if check(a).interlocked:`")
 
     def to_dict(self) -> dict:
         """JSON-serialisable summary."""
@@ -324,7 +302,7 @@ def _decide(assembly, frame, translational, certify, rank_rtol, lp_tol, contacts
         with _stage(timings, "rank", progress, budget):
             # without bent or given contacts one kernel motion is the whole answer: probe for a few, not hundreds
             probe = MAX_KERNEL_PROBE if bent.any() or contacts is not None else FIRST_KERNEL_PROBE
-            rank, kernel, rank_clear = _rank(A.matrix, rank_rtol, budget, probe)
+            rank, kernel, rank_clear = matrix_rank(A.matrix, rank_rtol, budget, probe)
         n = A.shape[1]
         # a clear kernel decides "not interlocked" by itself unless a bent contact or given contacts may undo it
         sliding_decides = (rank_clear and rank < n and not bent.any() and contacts is None
@@ -332,14 +310,14 @@ def _decide(assembly, frame, translational, certify, rank_rtol, lp_tol, contacts
         stress, lp_value, lp_motion = None, None, None
         if not sliding_decides:
             with _stage(timings, "lp", progress, budget):
-                stress, tolerances["lp_solver"], farkas = _positive_stress(A.matrix, lp_tol, lp_solver, budget)
+                stress, tolerances["lp_solver"], farkas = positive_stress(A.matrix, lp_tol, lp_solver, budget)
                 if stress is not None:
                     lp_value = 0.0
                 else:  # the stress problem's own infeasibility certificate is a motion; an LP only if it is not clean
                     lp_value, lp_motion = opening_motion(A.matrix, farkas, lp_tol)
                     tolerances["motion_from"] = "farkas" if lp_motion is not None else "lp"
                     if lp_motion is None:
-                        lp_value, lp_motion = _motion_lp(A.matrix, lp_tol, budget)
+                        lp_value, lp_motion = motion_lp(A.matrix, lp_tol, budget)
 
     no_frame = " (no frame: a finite assembly without fixed blocks can always move as a whole)" if not fixed else ""
     motions = []  # candidate "not interlocked" verdicts: the first one that survives bent contacts is the answer
@@ -376,9 +354,9 @@ def _decide(assembly, frame, translational, certify, rank_rtol, lp_tol, contacts
         with _stage(timings, "margin", progress, budget):
             source = "given" if tolerance is not None else _tolerance_source(found, A, precision)
             verdict = _with_margin(verdict, assess(A, found, assembly.block_size, stress, limits, source,
-                                                   per_contact=True), A, len(assembly),
+                                                   per_contact=True, budget=budget), A, len(assembly),
                                    _coarsest(found, A, limits) if tolerance is None else None)
-            verdict = _with_play(verdict, A, found)
+            verdict = _with_play(verdict, A, found, budget)
     if certify:
         from interlock.verify.certify import certify_verdict
 
@@ -513,7 +491,7 @@ def _tolerance_source(found, A: InterlockingMatrix, precision: Precision) -> str
     return source + (f"; faces bent by up to {max(bends):.2g}" if bends else "")
 
 
-def _with_play(verdict: Verdict, A: InterlockingMatrix, found) -> Verdict:
+def _with_play(verdict: Verdict, A: InterlockingMatrix, found, budget: Budget | None = None) -> Verdict:
     """An "interlocked" verdict on contacts across gaps, with the play the gaps allow to first order.
 
     Rows ``r`` of a contact across a gap ``g_r`` (:attr:`~interlock.verify.contacts.Contact.separation`)
@@ -526,7 +504,7 @@ def _with_play(verdict: Verdict, A: InterlockingMatrix, found) -> Verdict:
         return verdict
     row_gaps = gaps[A.row_contact]
     # rows without a gap may not open at all: a floor far below the gaps keeps the bound's tolerances positive
-    proved = load_path_bound(A.matrix, np.maximum(row_gaps, 1e-9 * row_gaps.max()), A.block_size)
+    proved = load_path_bound(A.matrix, np.maximum(row_gaps, 1e-9 * row_gaps.max()), A.block_size, budget=budget)
     if math.isinf(proved.bound):
         return dataclasses.replace(verdict, status=f"{verdict.status}; gaps up to {row_gaps.max():.3g} within the "
                                                    "contact tolerance (no bound on their play proved)")
@@ -581,228 +559,6 @@ def _with_margin(verdict: Verdict, margin: Margin, A: InterlockingMatrix, blocks
     return dataclasses.replace(verdict, interlocked=None, status=(
         f"not conclusive within the tolerance {margin.tolerance:.3g}: {margin}; "
         f"the exact input is interlocked ({verdict.status})"))
-
-
-def _rank(A: sp.csr_matrix, rtol: float, budget: Budget | None = None, probe: int = MAX_KERNEL_PROBE):
-    """(numerical rank, kernel basis as columns, whether the rank is clear of the tolerance band).
-
-    Without rows every column is in the kernel; the basis returned is then
-    the first :data:`MAX_KERNEL_PROBE` unit vectors (never an ``n x n``
-    identity: 10,000 separate blocks would ask for 27 GB).
-    """
-    m, n = A.shape
-    if m == 0:
-        return 0, np.eye(n, min(n, MAX_KERNEL_PROBE)), True
-    if n <= DENSE_COLUMNS:
-        # cheap first: the Gram matrix's eigenvalues resolve sigma_min down to ~1e-8 sigma_max, which
-        # settles well-conditioned matrices (far above the inconclusive band) without a dense QR
-        gram_values = scipy.linalg.eigvalsh((A.T @ A).toarray())
-        if gram_values[0] >= (GRAM_SURE_RTOL**2) * gram_values[-1] > 0:
-            return n, np.zeros((n, 0)), True
-        dense = A.toarray()
-        if m > n:  # the SVD of the triangular factor is the SVD of A, and cheaper to take
-            dense = scipy.linalg.qr(dense, mode="r", overwrite_a=True)[0][:n]
-        _, sigma, vt = scipy.linalg.svd(dense, full_matrices=m < n)
-        sigma = np.concatenate([sigma, np.zeros(n - len(sigma))])
-        top = sigma.max(initial=0.0) or 1.0
-        zero = sigma <= rtol * top
-        clear = not np.any((sigma > rtol * top) & (sigma < RANK_CLEAR_RTOL * top))
-        return int((~zero).sum()), vt[zero].T, clear
-    return _sparse_rank(A, rtol, budget, probe)
-
-
-def _sparse_rank(A: sp.csr_matrix, rtol: float, budget: Budget | None = None, probe: int = MAX_KERNEL_PROBE):
-    """Rank and kernel from block inverse iteration on ``A^T A + s I`` (one sparse LU).
-
-    The block converges to the eigenvectors of the smallest eigenvalues even
-    when zero has a large multiplicity (where Lanczos misses copies); its
-    Ritz values are upper bounds, so a zero is never reported where the
-    smallest nonzero singular value lies.  The block doubles while all its
-    Ritz values are zero, up to ``probe`` (at most :data:`MAX_KERNEL_PROBE`).
-    """
-    n = A.shape[1]
-    gram = (A.T @ A).tocsc()
-    top = float(scipy.sparse.linalg.norm(gram, 1))  # >= sigma_max^2, and as close as a Lanczos run for these matrices
-    threshold = max(rtol, GRAM_RESOLUTION) * np.sqrt(top)
-    shift = 1e-10 * top
-    lu = scipy.sparse.linalg.splu((gram + shift * sp.identity(n, format="csc")).tocsc())
-    rng = np.random.default_rng(0)
-    k = min(FIRST_KERNEL_PROBE, n)
-    while True:
-        block = np.linalg.qr(rng.standard_normal((n, k)))[0]
-        for _ in range(INVERSE_ITERATIONS):
-            block = np.linalg.qr(lu.solve(block))[0]
-            if budget is not None:
-                budget.check("rank")
-        values, rotation = np.linalg.eigh(block.T @ (gram @ block))
-        sigma = np.sqrt(np.clip(values, 0, None))
-        zero = sigma <= threshold
-        if not zero.all() or k >= min(probe, MAX_KERNEL_PROBE, n):
-            break
-        k = min(2 * k, probe, MAX_KERNEL_PROBE, n)
-    clear = not np.any((sigma > threshold) & (sigma < RANK_CLEAR_RTOL * np.sqrt(top)))
-    return int(n - zero.sum()), (block @ rotation)[:, zero], clear
-
-
-def _positive_stress(A: sp.csr_matrix, tol: float, solver: str = "clarabel", budget: Budget | None = None):
-    """``(w, solver used, certificate)``: ``w >= 1`` with ``A^T w = 0`` (Stiemke), or None when there is none.
-
-    When Clarabel proves there is none, ``certificate`` is its Farkas vector
-    (see :func:`opening_motion`), else None.
-
-    Clarabel solves the feasibility problem; HiGHS' interior-point method
-    minimises ``sum(w)`` (asked for, or when Clarabel neither solves nor
-    proves infeasibility).  Either answer is accepted only if it passes the
-    same residual check.  Both get the time left in ``budget``; a solver
-    stopped by it raises TimeLimitReached.
-    """
-    m = A.shape[0]
-    if m == 0:
-        return None, "none", None
-    w, status, farkas = _stress_clarabel(A, budget) if solver == "clarabel" else (None, "not run", None)
-    if status == "PrimalInfeasible":
-        return None, "clarabel", farkas
-    if w is None:
-        options = {"primal_feasibility_tolerance": tol, "dual_feasibility_tolerance": tol}
-        if budget is not None and budget.solver_limit() is not None:
-            options["time_limit"] = budget.solver_limit()
-        result = scipy.optimize.linprog(np.ones(m), A_eq=A.T.tocsr(), b_eq=np.zeros(A.shape[1]), bounds=(1, None),
-                                        method="highs-ipm", options=options)
-        if result.status == 1 and budget is not None:
-            budget.check("lp")
-        w, solver = (result.x if result.status == 0 else None), "highs-ipm"
-    if w is None:
-        return None, solver, None
-    residual = np.abs(A.T @ w).max(initial=0.0)
-    if w.min() < 1 - tol or residual > tol * np.abs(w).max():
-        return None, solver, None
-    return w, solver, None
-
-
-def _clarabel_settings(budget: Budget | None):
-    import clarabel
-
-    settings = clarabel.DefaultSettings()
-    settings.verbose = False
-    settings.direct_solve_method = "faer"
-    settings.max_threads = SOLVER_THREADS
-    if budget is not None and budget.solver_limit() is not None:
-        settings.time_limit = budget.solver_limit()
-    return settings
-
-
-def _stress_clarabel(A: sp.csr_matrix, budget: Budget | None = None):
-    """The stress as a feasibility problem in Clarabel's conic form.
-
-    ``[A^T; -I] w + s = [0; -1]`` with ``s`` in the zero cone times the
-    nonnegative cone, i.e. ``A^T w = 0`` and ``w >= 1``.
-    """
-    import clarabel
-
-    m, n = A.shape
-    constraints = sp.vstack([A.T, -sp.identity(m)]).tocsc()
-    # a zero objective asks only for feasibility: 10 interior-point iterations instead of 31 for min sum(w),
-    # and the point found lies inside the cone (every weight above 1), as a Stiemke certificate should
-    solver = clarabel.DefaultSolver(sp.csc_matrix((m, m)), np.zeros(m), constraints,
-                                    np.concatenate([np.zeros(n), -np.ones(m)]),
-                                    [clarabel.ZeroConeT(n), clarabel.NonnegativeConeT(m)], _clarabel_settings(budget))
-    solution = solver.solve()
-    status = str(solution.status)
-    if status == "MaxTime" and budget is not None:
-        budget.check("lp")
-    farkas = np.asarray(solution.z)[:n] if status == "PrimalInfeasible" else None
-    return (np.asarray(solution.x) if status == "Solved" else None), status, farkas
-
-
-def opening_motion(A: sp.csr_matrix, x, tol: float = LP_TOL):
-    """``(value, x)``: an interior-point motion cleaned into one with ``A x >= 0`` exactly checked, or ``(None, None)``.
-
-    Clarabel proves ``A^T w = 0, w >= 1`` infeasible by a dual ``z = (x, A x)``
-    with ``A x >= 0`` and ``1^T A x > 0`` (Farkas): a motion that opens
-    contacts.  An interior point only approximates it: rows that the exact
-    motion keeps shut come out at ``+-1e-10 .. 1e-4`` of the largest row,
-    some of them negative (a 559-block peer matrix had 435 rows below
-    ``-1e-7 max(A x)``).  For each threshold ``kappa`` of
-    :data:`FARKAS_CLOSED_RTOLS`, from fine to coarse, the rows below
-    ``kappa max(A x)`` are projected shut, ``x <- x - A_C^+ (A_C x)`` (least
-    squares, one sparse LU of the regularised normal equations), and the
-    result is accepted when every row is at least
-    ``-tol max(A x)`` and some row stays open (up to
-    :data:`PROJECTION_ROUNDS` projections per threshold; last, the vector as
-    it came, if it passes unprojected).  The value is
-    ``1^T A x / max(A x)``, a lower bound on the motion LP's.
-
-    Examples
-    --------
-    >>> import scipy.sparse as sp
-    >>> A = sp.csr_matrix(np.array([[1.0, 0.0], [0.0, 1.0], [1.0, 1.0]]))
-    >>> value, x = opening_motion(A, np.array([1.0, -1e-4]))  # the second row slightly negative: noise
-    >>> round(value, 6), (np.round(x, 12) + 0.0).tolist()
-    (2.0, [1.0, 0.0])
-    """
-    if x is None or not len(x):
-        return None, None
-    x = np.asarray(x, dtype=float)
-    y = A @ x
-    top = float(y.max(initial=0.0))
-    if not top > 0:
-        return None, None
-    for kappa in FARKAS_CLOSED_RTOLS:
-        moved, z = x, y
-        for _ in range(PROJECTION_ROUNDS):  # a second round shuts what the first left slightly negative
-            closed = np.flatnonzero(z <= kappa * float(z.max(initial=0.0)))
-            if not len(closed):
-                break
-            moved = moved - _least_squares(A[closed], z[closed])
-            z = A @ moved
-            largest = float(z.max(initial=0.0))
-            if largest > 0 and z.min() >= -tol * largest:
-                return float(z.sum() / largest), moved / largest
-            if not largest > 0:
-                break
-    if y.min() >= -tol * top:  # no projection keeps it a motion, but it is one as it came
-        return float(y.sum() / top), x / top
-    return None, None
-
-
-def _least_squares(A: sp.csr_matrix, b: np.ndarray) -> np.ndarray:
-    """``argmin |A d - b|^2 + mu |d|^2`` with ``mu = 1e-12 |A^T A|_1``: nearly the least-norm least-squares
-    solution, by one sparse LU (LSQR took 7,685 iterations, 1.4 s, on a 497-block p4 patch's shut rows).  The
-    caller checks what it gives exactly, so the regularisation only decides how close it comes."""
-    gram = (A.T @ A).tocsc()
-    mu = 1e-12 * max(float(scipy.sparse.linalg.norm(gram, 1)), np.finfo(float).tiny)
-    return scipy.sparse.linalg.splu((gram + mu * sp.identity(A.shape[1], format="csc")).tocsc()).solve(A.T @ b)
-
-
-def _motion_lp(A: sp.csr_matrix, tol: float, budget: Budget | None = None):
-    """``max 1^T s`` with ``A x = s``, ``0 <= s <= 1``, by Clarabel's interior-point method: (value, x).
-
-    The fallback when the Farkas vector cannot be cleaned; the interior point
-    is cleaned the same way (:func:`opening_motion`).  ``(None, None)`` when
-    it fails or yields no clean motion (its status in the verdict), never a
-    simplex run over ``[A; -A]``, which took over 15 minutes on a 559-block
-    peer matrix.
-    """
-    import clarabel
-
-    m, n = A.shape
-    if m == 0:
-        return 0.0, np.zeros(n)
-    # variables (x, s): minimise -1^T s subject to A x - s = 0, -s <= 0, s <= 1
-    eye = sp.identity(m, format="csc")
-    constraints = sp.vstack([sp.hstack([A, -eye]), sp.hstack([sp.csc_matrix((m, n)), -eye]),
-                             sp.hstack([sp.csc_matrix((m, n)), eye])]).tocsc()
-    rhs = np.concatenate([np.zeros(m), np.zeros(m), np.ones(m)])
-    solver = clarabel.DefaultSolver(sp.csc_matrix((n + m, n + m)), np.concatenate([np.zeros(n), -np.ones(m)]),
-                                    constraints, rhs, [clarabel.ZeroConeT(m), clarabel.NonnegativeConeT(2 * m)],
-                                    _clarabel_settings(budget))
-    solution = solver.solve()
-    status = str(solution.status)
-    if status == "MaxTime" and budget is not None:
-        budget.check("lp")
-    if status not in ("Solved", "AlmostSolved"):
-        return None, None
-    return opening_motion(A, np.asarray(solution.x)[:n], tol)
 
 
 def _motion(A: InterlockingMatrix, x, blocks: int, reversible: bool):

@@ -71,7 +71,6 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.linalg
 
 from interlock.errors import InterlockError
 
@@ -139,7 +138,8 @@ class LoadPathBound:
 
 
 def load_path_bound(A, eps, block_size: int = 6, *, start: float | None = None, passes: int = LOAD_PATH_PASSES,
-                    target: float | None = None, pivots: int = LOAD_PATH_PIVOTS) -> LoadPathBound:
+                    target: float | None = None, pivots: int = LOAD_PATH_PIVOTS, budget=None,
+                    stage: str = "margin") -> LoadPathBound:
     """A proved bound ``R >= max {||x||_inf : A x >= -eps}`` from load paths built block by block.
 
     Parameters
@@ -157,6 +157,10 @@ def load_path_bound(A, eps, block_size: int = 6, *, start: float | None = None, 
         Stop as soon as the bound is at most this (e.g. 1: the margin exceeds 1).
     pivots : int
         Simplex pivots per local LP at most.
+    budget : Budget, optional
+        The call's time budget (:mod:`interlock.verify.budget`): checked after
+        every pass and every local LP of the regional step, so a spent budget
+        raises TimeLimitReached naming ``stage``.
 
     Returns
     -------
@@ -203,6 +207,8 @@ def load_path_bound(A, eps, block_size: int = 6, *, start: float | None = None, 
         done += 1
         policy, count = paths.sweep(paths.layers if done % 2 else paths.layers[::-1], pivots)
         total += count
+        if budget is not None:
+            budget.check(stage)
         if done >= LOAD_PATH_FIRST_TRY:
             proper = paths.evaluate(policy)  # if not, the values are pushed up along the policy
             if proper:
@@ -212,6 +218,8 @@ def load_path_bound(A, eps, block_size: int = 6, *, start: float | None = None, 
         # the values V rest on the proved gamma; a unit load starts from the slacks, so it gets more pivots
         _, count = paths.policy(LOAD_PATH_UNIT_PIVOTS * pivots // LOAD_PATH_PIVOTS, units=True, incidences=False)
         total += count
+        if budget is not None:
+            budget.check(stage)
         bound = float(paths.V.max(initial=0.0))
         if best is not None and bound >= (1 - LOAD_PATH_STALL) * best.bound:
             break
@@ -224,13 +232,14 @@ def load_path_bound(A, eps, block_size: int = 6, *, start: float | None = None, 
             break
         proved = paths.gamma.copy()
     if best is not None and target is not None and best.bound > target:
-        best = _regional(A, eps, paths, proved, best, target)
+        best = _regional(A, eps, paths, proved, best, target, budget, stage)
     if best is None:
         return LoadPathBound(math.inf, np.full((blocks * block_size, 2), np.inf), done, total)
     return LoadPathBound(best.bound, best.coordinates, best.passes, total)
 
 
-def _regional(A, eps, paths, proved, best: LoadPathBound, target: float) -> LoadPathBound:
+def _regional(A, eps, paths, proved, best: LoadPathBound, target: float, budget=None,
+              stage: str = "margin") -> LoadPathBound:
     """Lower the coordinate bounds above ``target`` by exact LPs over the blocks near the coordinate's block.
 
     For block ``g`` and radius ``k`` take the blocks ``S`` within ``k``
@@ -274,7 +283,11 @@ def _regional(A, eps, paths, proved, best: LoadPathBound, target: float) -> Load
             local = A[rows][:, columns].T.tocsr()
             load = np.zeros(len(columns))
             load[np.searchsorted(region, g) * size + k] = 1.0 if side == 0 else -1.0
-            result = scipy.optimize.linprog(cost, A_eq=local, b_eq=-load, bounds=(0, None), method="highs")
+            options = {} if budget is None or budget.solver_limit() is None else {"time_limit": budget.solver_limit()}
+            result = scipy.optimize.linprog(cost, A_eq=local, b_eq=-load, bounds=(0, None), method="highs",
+                                            options=options)
+            if budget is not None:
+                budget.check(stage)
             if result.status != 0 or result.x is None:
                 continue
             u = np.maximum(result.x, 0.0)

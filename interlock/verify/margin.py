@@ -217,7 +217,7 @@ def margin_lower_bound(A: sp.csr_matrix, eps: np.ndarray, stress, chunk: int = M
     return math.inf if largest <= 0 else 1.0 / largest
 
 
-def tolerant_motion(A: sp.csr_matrix, eps: np.ndarray, tol: float = 1e-9):
+def tolerant_motion(A: sp.csr_matrix, eps: np.ndarray, tol: float = 1e-9, budget=None):
     """The motion LP with every row relaxed by its tolerance: ``max 1^T A x``, ``A x >= -eps``, ``|x| <= 1``.
 
     Returns ``(x, rho, status)`` where ``rho = max_r(-(A x)_r / eps_r) /
@@ -225,7 +225,9 @@ def tolerant_motion(A: sp.csr_matrix, eps: np.ndarray, tol: float = 1e-9):
     keeps every contact within its tolerance) and ``status`` is "found";
     or ``(None, inf, status)`` with ``status`` "solver failed: <HiGHS'
     message>" or "no motion within the tolerance found" (the LP's optimum is
-    ``x = 0``).
+    ``x = 0``).  HiGHS gets :data:`MOTION_TIME_LIMIT`, or what is left of
+    ``budget`` (:mod:`interlock.verify.budget`) when less; a spent budget
+    raises TimeLimitReached ("margin").
 
     Examples
     --------
@@ -240,11 +242,12 @@ def tolerant_motion(A: sp.csr_matrix, eps: np.ndarray, tol: float = 1e-9):
     objective = -np.asarray(A.sum(axis=0)).ravel()
     # rows relaxed by a little less than eps, so that HiGHS' feasibility tolerance cannot push a row past it
     result = scipy.optimize.linprog(objective, A_ub=-A, b_ub=TOLERANT_SHARE * eps, bounds=(-1.0, 1.0), method="highs",
-                                    options={"primal_feasibility_tolerance": tol, "time_limit": MOTION_TIME_LIMIT})
-    return _solved(A, eps, result)
+                                    options={"primal_feasibility_tolerance": tol, "time_limit": _seconds(budget)})
+    return _solved(A, eps, result, budget)
 
 
-def coordinate_motion(A: sp.csr_matrix, eps: np.ndarray, column: int, sign: float = 1.0, tol: float = 1e-9):
+def coordinate_motion(A: sp.csr_matrix, eps: np.ndarray, column: int, sign: float = 1.0, tol: float = 1e-9,
+                      budget=None):
     """The exact LP of one coordinate: ``max sign * x_j``, ``A x >= -eps``, ``|x| <= 1``; as :func:`tolerant_motion`.
 
     The margin is ``rho = 1 / max_j max_{+-} (+-x_j over P)``: the coordinate
@@ -262,13 +265,22 @@ def coordinate_motion(A: sp.csr_matrix, eps: np.ndarray, column: int, sign: floa
     objective[column] = -float(sign)
     result = scipy.optimize.linprog(objective, A_ub=-A, b_ub=TOLERANT_SHARE * eps, bounds=(-1.0, 1.0), method="highs",
                                     options={"primal_feasibility_tolerance": _positive("tol", tol),
-                                             "time_limit": MOTION_TIME_LIMIT})
-    return _solved(A, eps, result)
+                                             "time_limit": _seconds(budget)})
+    return _solved(A, eps, result, budget)
 
 
-def _solved(A, eps, result):
-    """A motion LP's answer as ``(x, rho, status)``: its motion judged, or why there is none."""
+def _seconds(budget) -> float:
+    """A motion LP's time limit: :data:`MOTION_TIME_LIMIT`, or what is left of ``budget`` when less."""
+    left = None if budget is None else budget.solver_limit()
+    return MOTION_TIME_LIMIT if left is None else min(MOTION_TIME_LIMIT, left)
+
+
+def _solved(A, eps, result, budget=None):
+    """A motion LP's answer as ``(x, rho, status)``: its motion judged, or why there is none (a spent ``budget``:
+    TimeLimitReached)."""
     if result.status == 1 and "time" in str(result.message).lower():
+        if budget is not None:
+            budget.check("margin")
         return None, math.inf, f"solver stopped: time limit of {MOTION_TIME_LIMIT:.0f} s"
     if result.status != 0 or result.x is None:
         return None, math.inf, f"solver failed: {result.message}"
@@ -330,7 +342,7 @@ def rounding_tolerance(assembly) -> tuple[float, str]:
 
 
 def assess(matrix, contacts, scale: float, stress, tolerance, source: str, *, per_contact: bool | None = None,
-           passes: int = LOAD_PATH_PASSES) -> Margin:
+           passes: int = LOAD_PATH_PASSES, budget=None) -> Margin:
     """The margin of an "interlocked" float verdict against the tolerance ``tolerance`` of its input.
 
     Parameters
@@ -357,6 +369,9 @@ def assess(matrix, contacts, scale: float, stress, tolerance, source: str, *, pe
         Default: True when ``tolerance`` is an array.
     passes : int
         Passes of the load-path bound at most.
+    budget : Budget, optional
+        The call's time budget: the load paths and the motion LPs run under
+        it, and a spent budget raises TimeLimitReached ("margin").
 
     Returns
     -------
@@ -418,7 +433,7 @@ def assess(matrix, contacts, scale: float, stress, tolerance, source: str, *, pe
         t = np.maximum(t, EXACT_RTOL * scale)
     A = matrix.matrix
     eps = row_tolerances(matrix, contacts, t)
-    found = load_path_bound(A, eps, matrix.block_size, passes=passes, target=1.0)
+    found = load_path_bound(A, eps, matrix.block_size, passes=passes, target=1.0, budget=budget)
     lower = found.margin
     if lower <= 1.0 and stress is not None and A.shape[1] <= ONE_STRESS_COLUMNS:
         # both bounds are proved; where the load paths prove nothing (the TopoLite bunny's many small contacts),
@@ -431,9 +446,10 @@ def assess(matrix, contacts, scale: float, stress, tolerance, source: str, *, pe
         column, side = np.unravel_index(int(np.nanargmax(np.where(np.isfinite(found.coordinates),
                                                                    found.coordinates, -1.0))),
                                         found.coordinates.shape)
-        motion, upper, status = coordinate_motion(A, eps, int(column), 1.0 if side == 0 else -1.0)
+        motion, upper, status = coordinate_motion(A, eps, int(column), 1.0 if side == 0 else -1.0,
+                                                   budget=budget)
     if (motion is None or upper > 1.0) and not status.startswith("solver stopped"):  # no second slow LP
-        tried, tried_upper, tried_status = tolerant_motion(A, eps)
+        tried, tried_upper, tried_status = tolerant_motion(A, eps, budget=budget)
         if tried is not None and (motion is None or tried_upper < upper):
             motion, upper, status = tried, tried_upper, tried_status
         elif motion is None:

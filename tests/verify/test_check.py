@@ -477,3 +477,12 @@ def test_float32_far_from_the_origin_coarser_than_the_blocks_is_inconclusive(siz
         meshes.append(moved)
     v = check(Assembly.from_meshes(meshes, frame=list(cage.frame)), certify=True)
     assert v.interlocked is None and not v.certified and "coarser than its blocks" in v.status
+
+
+def test_a_verdict_has_no_truth_value():
+    """``if check(a):`` would be True for "not interlocked" too: bool() raises and names the attribute to use."""
+    grid = [trimesh.creation.box(bounds=[[x, y, 0], [x + 1, y + 1, 1]]) for x in range(3) for y in range(3)]
+    verdict = check(Assembly.from_meshes(grid), frame=[0, 1, 2, 3, 5, 6, 7, 8])
+    assert verdict.interlocked is False
+    with pytest.raises(TypeError, match=r"verdict\.interlocked"):
+        bool(verdict)

@@ -21,7 +21,7 @@ from interlock.blocks.assembly import Assembly
 from interlock.errors import InterlockError
 from interlock.files import json_float
 from interlock.verify.budget import Budget, TimeLimitReached
-from interlock.verify.check import SOLVER_THREADS
+from interlock.verify.first_order import SOLVER_THREADS
 from interlock.verify.statics.interfaces import statics_contacts
 
 __all__ = ["StabilityError", "StabilityResult", "EquilibriumSystem", "equilibrium_matrix", "friction_block",
@@ -330,7 +330,7 @@ def clarabel_lp(cost, constraints, right, equalities: int = 0, tolerance: float 
 def clarabel_solve(quadratic, cost, constraints, right, cones, tolerance: float | None = None,
                    budget: Budget | None = None, stage: str = "a cone program"):
     """Clarabel on ``min x.Q x / 2 + cost . x`` subject to ``right - constraints x`` in ``cones`` (Clarabel's
-    cone objects), quietly and on :data:`~interlock.verify.check.SOLVER_THREADS` threads; ``quadratic`` ``Q``
+    cone objects), quietly and on :data:`~interlock.verify.first_order.SOLVER_THREADS` threads; ``quadratic`` ``Q``
     may be ``None`` (an LP).  The one place the statics set Clarabel up (:func:`clarabel_lp`, and the cone
     program of :func:`~interlock.verify.statics.cra_coulomb.tresca`).  ``tolerance``, if given, replaces
     Clarabel's gap and feasibility tolerances (1e-8 by default; solutions that must pass an exact check use
