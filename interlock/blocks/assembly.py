@@ -21,7 +21,7 @@ from interlock.blocks.rhino import FRAME_LAYER, read_3dm_blocks
 from interlock.errors import AssemblyError
 
 __all__ = ["Assembly", "AssemblyError", "load_compas", "load_3dm", "NEIGHBOUR_RTOL", "RIGID_TOL", "KIND_DECIMALS",
-           "HEADER_MARKER", "STL_RECORD", "BLOCK_DATA"]
+           "HEADER_MARKER", "STL_RECORD", "BLOCK_DATA", "MAX_COORDINATE"]
 
 #: Bounding boxes closer than this (relative to the model size) count as touching.
 NEIGHBOUR_RTOL = 1e-6
@@ -30,6 +30,10 @@ RIGID_TOL = 1e-9
 #: Pairs of blocks whose relative transforms agree to this many decimals (lengths over the model size)
 #: are of one kind (:meth:`Assembly.pair_kinds`).
 KIND_DECIMALS = 9
+#: The farthest a block's vertex may lie from the origin (in model units): block volumes are cubes of lengths and
+#: squared distances and booleans multiply coordinates, so beyond about 1e100 they overflow float64 (1.8e308)
+#: into inf and nan; the constructor refuses such blocks with an :class:`AssemblyError`.
+MAX_COORDINATE = 1e100
 
 
 class Assembly:
@@ -85,6 +89,7 @@ class Assembly:
             raise AssemblyError(f"got {len(types)} block types but {len(transforms)} transforms; "
                                 "give one of each per block")
         _check_transforms(transforms)
+        _check_reach(self.meshes, types, transforms, self.labels)
         types.setflags(write=False)
         transforms.setflags(write=False)
         self.types = types
@@ -534,6 +539,12 @@ def _checked_meshes(meshes, names) -> tuple[trimesh.Trimesh, ...]:
         return ()
     offsets = np.cumsum([0] + [len(m.vertices) for m in meshes])
     vertices = np.vstack([m.vertices for m in meshes]).astype(float, copy=False)
+    local = np.maximum.reduceat(_reach(vertices), offsets[:-1])
+    if local.max() > MAX_COORDINATE:  # before any product of coordinates overflows
+        k = int(np.argmax(local))
+        raise AssemblyError(f"{names[k]} reaches {local[k]:.3g} from the origin: beyond {MAX_COORDINATE:g} its "
+                            "volumes and squared distances overflow float64; give the model in other units (scale "
+                            "it down) or nearer the origin")
     vertex_mesh = np.repeat(np.arange(len(meshes)), np.diff(offsets))
     faces = [np.asarray(m.faces, dtype=np.int64) + o for m, o in zip(meshes, offsets)]
     open_meshes = np.unique(vertex_mesh[unmatched_edges(np.vstack(faces))[:, 0]])
@@ -589,6 +600,30 @@ def _check_transforms(transforms):
     if err > RIGID_TOL:
         raise AssemblyError("transforms must be rigid motions or mirror images (orthogonal linear part); "
                             f"deviation {err:.2e}")
+
+
+def _reach(points) -> np.ndarray:
+    """The distance of each point (row) from the origin, scaled by the largest coordinate so it cannot overflow."""
+    points = np.asarray(points, dtype=float)
+    largest = np.abs(points).max(initial=0.0)
+    if not largest > 0:
+        return np.zeros(len(points))
+    return largest * np.sqrt(np.square(points / largest).sum(axis=1))
+
+
+def _check_reach(meshes, types, transforms, labels) -> None:
+    """Refuse a block with a vertex farther than :data:`MAX_COORDINATE` from the origin (the transform's translation
+    plus the mesh's farthest vertex: an upper bound, exact for unrotated blocks), before anything overflows."""
+    if not len(types):
+        return
+    offsets = np.cumsum([0] + [len(m.vertices) for m in meshes])
+    local = np.maximum.reduceat(_reach(np.vstack([m.vertices for m in meshes])), offsets[:-1])
+    reach = local[types] + _reach(transforms[:, :3, 3])
+    if reach.max() > MAX_COORDINATE:
+        k = int(np.argmax(reach))
+        raise AssemblyError(f"block {k} ({labels[k]}) reaches {reach[k]:.3g} from the origin: beyond "
+                            f"{MAX_COORDINATE:g} its volumes and squared distances overflow float64; give the "
+                            "model in other units (scale it down) or nearer the origin")
 
 
 def _checked_lattice(lattice) -> np.ndarray:

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from interlock.blocks.assembly import Assembly
+from interlock.blocks.assembly import MAX_COORDINATE, Assembly
 from interlock.errors import AssemblyError, InterlockError
 
 __all__ = ["manifold_solid", "OverlapError", "Overlap", "pair_overlaps", "overlaps", "overlaps_without_contact",
@@ -24,9 +24,6 @@ CROSSING_RTOL = 1e-9
 #: A triangle is on one side of another's plane when its corners are this far (relative to the mesh size)
 #: beyond it: far above the rounding of the signed distances (1e-16), far below :data:`CROSSING_RTOL`.
 SEPARATED_RTOL = 1e-12
-#: The largest coordinate (in model units) the overlap tests accept: block volumes are cubes of lengths and
-#: the booleans multiply coordinates, so beyond about 1e100 they overflow float64 (1.8e308) into inf and nan.
-MAX_COORDINATE = 1e100
 #: Triangles in a leaf of the self-intersection test's bounding-volume tree.  Measured on n-gon prisms and
 #: cylinders (n = 2,000 ... 20,000) and the bunny's parts: 4 visits twice the node pairs, 16 tests twice the
 #: triangle pairs; 8 is the fastest of the three.
