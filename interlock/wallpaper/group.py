@@ -15,10 +15,16 @@ from interlock.wallpaper.elements import GroupElement, Vector, parse_symop
 from interlock.wallpaper.lattice import LatticeParameters, conventional_basis, lattice_parameters
 from interlock.wallpaper.tables import GROUPS, TABLES, GroupTable
 
-__all__ = ["WallpaperGroup", "SidePairing", "group"]
+__all__ = ["WallpaperGroup", "SidePairing", "group", "MAX_ELEMENTS"]
 
 #: Relative tolerance (of the disc radius) for "tile meets the disc" in ``elements_within``.
 MEETS_RTOL = 1e-9
+#: The most candidate tiles :meth:`WallpaperGroup.elements_within` tests unless its ``max_elements`` says
+#: more, counted before any is made: each candidate costs about 1 KB (a group element of fractions, its tile),
+#: so the default is about 10 GB at most, a hundred times the candidates of the largest patch the block
+#: generators make by default (``interlock.blocks.limits.MAX_BLOCKS``).  ``p4`` within a radius of 1e6 would
+#: be 1.6e13 candidates (a 29 TiB array of translations alone).
+MAX_ELEMENTS = 10_000_000
 
 # Columns: the primitive basis vectors in conventional coordinates of a centred cell.
 _CENTRED_TO_PRIMITIVE = ((Fraction(1, 2), Fraction(1, 2)), (Fraction(-1, 2), Fraction(1, 2)))
@@ -173,7 +179,15 @@ class WallpaperGroup:
         """The 3x3 affine matrix of ``g`` in Cartesian coordinates."""
         if isinstance(g, GroupElement):
             return self._to_cartesian @ g.affine() @ self._to_lattice
-        m = np.asarray(g, dtype=float)
+        if isinstance(g, (str, bytes)):
+            raise InterlockError(f"expected a GroupElement or a finite 3x3 affine matrix, got the text {g!r}; "
+                                 "read a symmetry operation with interlock.wallpaper.parse_symop (lattice "
+                                 "coordinates), or take one of the group's elements (group.cosets, group.element)")
+        try:
+            m = np.asarray(g, dtype=float)
+        except (TypeError, ValueError):
+            raise InterlockError(f"expected a GroupElement or a finite 3x3 affine matrix, got "
+                                 f"{type(g).__name__} {g!r:.60}") from None
         if m.shape != (3, 3) or not np.all(np.isfinite(m)):
             raise InterlockError(f"expected a GroupElement or a finite 3x3 affine matrix, got shape {m.shape}")
         return m
@@ -246,12 +260,20 @@ class WallpaperGroup:
         coords = np.einsum("nij,vj->nvi", mats[:, :2, :2], domain) + mats[:, None, :2, 2]
         return shapely.polygons(coords)
 
-    def elements_within(self, radius: float, center=None) -> tuple[GroupElement, ...]:
+    def elements_within(self, radius: float, center=None,
+                        max_elements: int = MAX_ELEMENTS) -> tuple[GroupElement, ...]:
         """Every ``g`` whose tile ``g(F)`` meets the closed disc of ``radius`` about ``center``.
 
         ``center`` defaults to the centroid of F.  Elements come sorted by the
         distance of their tile from the centre (the identity first), ties
         broken by coset and translation, so the order is reproducible.
+
+        Raises
+        ------
+        InterlockError
+            A radius or centre that is not a finite number (point), or more
+            candidate tiles than ``max_elements`` (default
+            :data:`MAX_ELEMENTS`), counted before any is made.
 
         Notes
         -----
@@ -261,8 +283,14 @@ class WallpaperGroup:
 
         >>> len(group("p1", gamma=90).elements_within(0.4))
         1
+        >>> group("p4").elements_within(1e6)  # doctest: +ELLIPSIS
+        Traceback (most recent call last):
+        ...
+        interlock.errors.InterlockError: p4: the tiles within radius 1e+06 are about 1.6e+13 candidates, more than ...
         """
         radius = _finite_number(radius, "radius")
+        if isinstance(max_elements, bool) or not isinstance(max_elements, int) or max_elements < 1:
+            raise InterlockError(f"max_elements must be an integer >= 1, got {max_elements!r}")
         if radius < 0:
             raise InterlockError(f"radius must be >= 0, got {radius}")
         domain = self.fundamental_domain()
@@ -272,14 +300,28 @@ class WallpaperGroup:
         candidates = []
         base_tiles = self.tiles(self.cosets)
         inverse_lattice = np.linalg.inv(self.lattice)
-        for i, tile in enumerate(base_tiles):
+        windows = []
+        for tile in base_tiles:
             corners = np.asarray(tile.exterior.coords)[:-1]
             mid = corners.mean(axis=0)
-            rho = np.linalg.norm(corners - mid, axis=1).max()
-            reach = radius + rho
+            reach = radius + np.linalg.norm(corners - mid, axis=1).max()
             # lattice coordinates of translations n with |mid + n L - center| <= reach
-            n_center = (center - mid) @ inverse_lattice
-            half = reach * np.linalg.norm(inverse_lattice, axis=0)
+            with np.errstate(over="ignore", invalid="ignore"):
+                n_center = (center - mid) @ inverse_lattice
+                half = reach * np.linalg.norm(inverse_lattice, axis=0)
+            windows.append((mid, reach, n_center, half))
+        count = sum(math.prod(2 * float(h) + 3 for h in half) for _, _, _, half in windows)
+        far = max(float(np.abs(n).max()) + float(h.max()) for _, _, n, h in windows)
+        if not count <= max_elements:  # also NaN and inf
+            raise InterlockError(f"{self.name}: the tiles within radius {radius:g} are about {count:.2g} candidates, "
+                                 f"more than max_elements={max_elements:,} (about 1 KB each); give a smaller radius "
+                                 "(in model units: the cell is "
+                                 f"{math.sqrt(self.cell_area):.3g} across), or raise max_elements")
+        if not far < 2.0**53:  # translations beyond 2**53 cells are not exact integers in float64
+            raise InterlockError(f"{self.name}: the disc of radius {radius:g} about {center.tolist()} reaches "
+                                 f"{far:.3g} cells from the origin, beyond 2**53, where float64 cannot tell one "
+                                 "cell from the next; move the centre nearer the origin or shrink the radius")
+        for i, (mid, reach, n_center, half) in enumerate(windows):
             ranges = [np.arange(math.floor(c - h), math.ceil(c + h) + 1) for c, h in zip(n_center, half)]
             shifts = np.stack(np.meshgrid(*ranges, indexing="ij"), axis=-1).reshape(-1, 2)
             near = np.linalg.norm(mid + shifts @ self.lattice - center, axis=1) <= reach * (1 + MEETS_RTOL)

@@ -9,12 +9,19 @@ import numpy as np
 
 from interlock.errors import LatticeError
 
-__all__ = ["LatticeParameters", "lattice_parameters", "conventional_basis"]
+__all__ = ["LatticeParameters", "lattice_parameters", "conventional_basis", "LENGTH_RANGE"]
 
 #: Relative tolerance for "b equals a" and "gamma equals 90/120 degrees".
 PARAMETER_RTOL = 1e-9
 
 _DEFAULT_OBLIQUE_GAMMA = 75.0
+
+#: The cell lengths ``a`` and ``b`` allowed.  Blocks are built from cells of these lengths, their volumes are
+#: cubes of lengths and their contacts products of them, so far beyond (1e100) areas, volumes and squared
+#: distances overflow float64; 1e30 also keeps a patch of a few hundred cells within float32 (3.4e38, the STL,
+#: GLB and 3MF coordinates) and far within ``interlock.blocks.assembly.MAX_COORDINATE``; 1e-30 keeps volumes of
+#: such cells (1e-90) far above float64's smallest numbers.
+LENGTH_RANGE = (1e-30, 1e30)
 
 _RULES = {
     # system: (b must equal a, required gamma or None, text for the message)
@@ -80,4 +87,9 @@ def _length(name, value, group_name, allowed) -> float:
     value = _number(name, value, group_name, allowed)
     if value <= 0.0:
         raise LatticeError(f"{group_name}: the length {name} = {value} must be positive; allowed: {allowed}")
+    low, high = LENGTH_RANGE
+    if not low <= value <= high:
+        raise LatticeError(f"{group_name}: the length {name} = {value:g} is outside {low:g}..{high:g}, where areas "
+                           "and volumes of the blocks would overflow or underflow float64; give the lattice in "
+                           "other units")
     return value

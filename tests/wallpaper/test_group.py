@@ -138,3 +138,30 @@ def test_geometry_scales_with_the_lattice(name, scale, b_ratio, gamma):
         target = F2[[s.edge, s.edge + 1]]
         err = min(np.abs(ends - target).max(), np.abs(ends[::-1] - target).max())
         assert err <= 1e-9 * scale
+
+
+def test_elements_within_a_huge_radius_is_refused_before_anything_is_made():
+    # issue 36: p4 within 1e6 asked numpy for 29 TiB of translations
+    with pytest.raises(InterlockError, match=r"about 1\.6e\+13 candidates, more than max_elements=10,000,000"):
+        wallpaper.group("p4").elements_within(1e6)
+    with pytest.raises(InterlockError, match="max_elements"):
+        wallpaper.group("p6").elements_within(1e308)
+    with pytest.raises(InterlockError, match="beyond 2\\*\\*53"):
+        wallpaper.group("p4").elements_within(1.0, center=(1e20, 0.0))
+    assert len(wallpaper.group("p4").elements_within(3.0, max_elements=1000)) > 0
+    with pytest.raises(InterlockError, match="max_elements"):
+        wallpaper.group("p4").elements_within(3.0, max_elements=10)
+
+
+@pytest.mark.parametrize("bad", ["x,y", b"x,y", [[1.0], [2.0, 3.0]], None, np.eye(2)])
+def test_to_3d_of_something_that_is_no_element_or_matrix_is_a_clear_error(bad):
+    with pytest.raises(InterlockError, match="expected a GroupElement or a finite 3x3 affine matrix"):
+        wallpaper.group("p4").to_3d(bad)
+
+
+@pytest.mark.parametrize("a", [1e200, 1e31, 1e-31, 1e-300])
+def test_cell_lengths_whose_areas_would_overflow_are_refused(a):
+    with pytest.raises(InterlockError, match="outside 1e-30..1e\\+30"):
+        wallpaper.group("p1", a=a)
+    with pytest.raises(InterlockError, match="outside"):
+        wallpaper.group("pm", b=a)
