@@ -2,7 +2,9 @@
 
 A reader (or a user after ``kill -9``) sees the old file or the complete new
 one, never a part: :func:`atomic_write` for one file, :func:`replace_folder`
-for a folder built in full beside the one it replaces.
+for a folder built in full beside the one it replaces.  The temporary file a
+killed write leaves beside its target is removed by the next successful write
+of that target.
 """
 
 from __future__ import annotations
@@ -11,12 +13,14 @@ import contextlib
 import ctypes
 import math
 import os
+import re
 import shutil
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
-__all__ = ["atomic_write", "write_atomically", "replace_folder", "unwritable", "json_float", "PARTIAL"]
+__all__ = ["atomic_write", "write_atomically", "replace_folder", "remove_stale_partials", "unwritable", "json_float",
+           "PARTIAL"]
 
 #: The marker in the names of temporary files and folders (``.NAME.<random>.partial.SUFFIX``); a killed write
 #: leaves such a file beside its target, never a damaged target.
@@ -54,18 +58,88 @@ def atomic_write(path) -> Iterator[Path]:
     ('whole', ['a.txt'])
     """
     path = Path(path)
-    descriptor, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=PARTIAL + path.suffix, dir=path.parent)
-    os.close(descriptor)
-    temporary = Path(name)
+    descriptor, temporary = _held_temporary(path)
     try:
-        os.chmod(temporary, 0o666 & ~_umask())  # as an ordinary new file, not mkstemp's 0600
-        yield temporary
-        _sync_file(temporary)
-        os.replace(temporary, path)
-    except BaseException:
-        temporary.unlink(missing_ok=True)
-        raise
+        try:
+            os.chmod(temporary, 0o666 & ~_umask())  # as an ordinary new file, not mkstemp's 0600
+            yield temporary
+            _sync_file(temporary)
+            os.replace(temporary, path)
+        except BaseException:
+            temporary.unlink(missing_ok=True)
+            raise
+    finally:
+        os.close(descriptor)  # releases the lock that marked the temporary file as being written
     _sync_folder(path.parent)
+    remove_stale_partials(path)
+
+
+def remove_stale_partials(path) -> list[Path]:
+    """Remove the temporary files that killed writes of ``path`` left beside it; return them.
+
+    Only files named as :func:`atomic_write` names its temporary files for
+    ``path`` (``.NAME.<8 random characters>.partial.SUFFIX``) are candidates,
+    and of those only the ones no running write holds: each write holds an
+    exclusive ``flock`` on its temporary file until it is renamed, and the
+    system releases it when the writer dies, however it dies.  Where files
+    cannot be locked (no ``fcntl``: Windows), a file another process has open
+    cannot be removed either, and is left.  :func:`atomic_write` calls this
+    after each successful write.
+
+    >>> import tempfile
+    >>> folder = Path(tempfile.mkdtemp())
+    >>> _ = (folder / ".a.stl.k2x9_q0w.partial.stl").write_bytes(b"cut short by kill -9")
+    >>> _ = (folder / ".a.stl.notes.partial.stl").write_text("not interlock's: kept")
+    >>> _ = write_atomically(folder / "a.stl", b"whole")
+    >>> sorted(p.name for p in folder.iterdir())
+    ['.a.stl.notes.partial.stl', 'a.stl']
+    """
+    path = Path(path)
+    pattern = re.compile(re.escape(f".{path.name}.") + r"[a-z0-9_]{8}" + re.escape(PARTIAL + path.suffix))
+    removed = []
+    try:
+        names = [entry for entry in os.scandir(path.parent) if pattern.fullmatch(entry.name)]
+    except OSError:
+        return removed
+    for entry in names:
+        try:
+            if not entry.is_file(follow_symlinks=False):
+                continue
+            descriptor = os.open(entry.path, os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0))
+        except OSError:
+            continue
+        try:
+            if _lock(descriptor, wait=False):  # no write holds it: its writer is gone
+                os.unlink(entry.path)
+                removed.append(Path(entry.path))
+        except OSError:  # removed meanwhile, or not removable (open elsewhere on Windows)
+            pass
+        finally:
+            os.close(descriptor)
+    return removed
+
+
+def _held_temporary(path: Path) -> tuple[int, Path]:
+    """A new temporary file for ``path``, open and locked (so :func:`remove_stale_partials` leaves it)."""
+    while True:
+        descriptor, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=PARTIAL + path.suffix, dir=path.parent)
+        _lock(descriptor, wait=True)
+        if os.fstat(descriptor).st_nlink > 0:
+            return descriptor, Path(name)
+        os.close(descriptor)  # another write's cleaning removed it before the lock was taken: make another
+
+
+def _lock(descriptor: int, wait: bool) -> bool:
+    """An exclusive ``flock`` on an open file; False if another holds it (``wait=False``).  True without fcntl."""
+    try:
+        import fcntl
+    except ImportError:  # Windows: an open file cannot be removed there, which protects it instead
+        return True
+    try:
+        fcntl.flock(descriptor, fcntl.LOCK_EX | (0 if wait else fcntl.LOCK_NB))
+    except BlockingIOError:
+        return False
+    return True
 
 
 def write_atomically(path, data: str | bytes) -> Path:
