@@ -9,7 +9,11 @@ import shapely
 
 from interlock.errors import InterlockError
 
-__all__ = ["Contact", "ContactError", "plane_bases"]
+__all__ = ["Contact", "ContactError", "plane_bases", "CONTACT_KINDS"]
+
+#: The contact types of the main paper's Remark 3.11 that the contact search finds (edge-face contacts are
+#: segments whose ends are vertex-face or edge-edge contacts).
+CONTACT_KINDS = ("face", "vertex-face", "edge-edge", "vertex-edge", "vertex-vertex")
 
 
 class ContactError(InterlockError):
@@ -71,6 +75,19 @@ class Contact:
         (:mod:`interlock.verify.precision`) plus, for faces bent within the
         tolerances, twice their bend.  None for contacts given by hand
         (:meth:`at_points`): the verdict reads it off the blocks.
+    kind : str
+        The contact type of Remark 3.11 (:data:`CONTACT_KINDS`): ``"face"``
+        (a polygon of positive area), ``"vertex-face"``, ``"edge-edge"``
+        (two edges crossing, not parallel), ``"vertex-edge"`` or
+        ``"vertex-vertex"``; a point contact has one vertex, the contact
+        point, and zero area.
+    normals : array (k, 3) or None
+        None when the contact admits one normal (``normal``): each vertex
+        gives one row of the interlocking matrix.  Otherwise the generators
+        of the cone of admissible normals (degenerate vertex-edge,
+        vertex-vertex and parallel-edge touches): non-penetration to first
+        order says only that *some* normal of the cone separates, which is
+        no linear row (docs/interlocking.md, "Contacts of every type").
     """
 
     i: int
@@ -87,6 +104,8 @@ class Contact:
     planar: bool = True
     separation: float = 0.0
     tolerance: float | None = None
+    kind: str = "face"
+    normals: np.ndarray | None = field(default=None, repr=False)
 
     @classmethod
     def at_points(cls, i: int, j: int, normal, points) -> Contact:
@@ -127,6 +146,10 @@ class Contact:
 
     def __str__(self) -> str:
         n = ", ".join(f"{x:.3g}" for x in self.normal)
+        if self.kind != "face":
+            p = ", ".join(f"{x:.6g}" for x in self.vertices[0])
+            cone = f", a cone of {len(self.normals)} normals" if self.normals is not None else ""
+            return f"{self.kind} contact {self.i}-{self.j} at ({p}), normal ({n}){cone}"
         holes = len(self.ring_sizes) - 1
         extra = f" with {holes} hole(s)" if holes else ""
         bent = "" if self.planar else f", faces bent by up to {self.deviation:.3g} (planar only within tolerance)"
@@ -139,7 +162,9 @@ class Contact:
         return {"i": self.i, "j": self.j, "normal": self.normal.tolist(), "vertices": self.vertices.tolist(),
                 "ring_sizes": list(self.ring_sizes), "area": self.area, "facet_i": self.facet_i,
                 "facet_j": self.facet_j, "origin": self.origin.tolist(), "basis": self.basis.tolist(),
-                "deviation": self.deviation, "planar": self.planar, "separation": self.separation}
+                "deviation": self.deviation, "planar": self.planar, "separation": self.separation,
+                **({} if self.kind == "face" else {"kind": self.kind}),
+                **({} if self.normals is None else {"normals": self.normals.tolist()})}
 
     @classmethod
     def from_dict(cls, data: dict) -> Contact:
@@ -160,6 +185,8 @@ class Contact:
             i, j, area = int(data["i"]), int(data["j"]), float(data["area"])
             facets = int(data["facet_i"]), int(data["facet_j"])
             extra = float(data["deviation"]), bool(data["planar"]), float(data["separation"])
+            kind = str(data.get("kind", "face"))
+            normals = None if data.get("normals") is None else np.array(data["normals"], dtype=float).reshape(-1, 3)
         except (KeyError, TypeError, ValueError) as error:
             raise ContactError(f"not a stored contact (as Contact.to_dict writes it): {error}") from None
         normal, vertices, origin, basis = arrays
@@ -170,9 +197,11 @@ class Contact:
         if area > 0 or len(sizes) > 1:
             rings = np.split((vertices - origin) @ basis.T, np.cumsum(sizes)[:-1])
             polygon = shapely.Polygon(rings[0], rings[1:])
-        for array in arrays:
+        if kind not in CONTACT_KINDS:
+            raise ContactError(f"a stored contact {i}-{j} has an unknown kind {kind!r}")
+        for array in arrays + ([] if normals is None else [normals]):
             array.setflags(write=False)
-        return cls(i, j, normal, vertices, area, *facets, polygon, origin, basis, *extra)
+        return cls(i, j, normal, vertices, area, *facets, polygon, origin, basis, *extra, kind=kind, normals=normals)
 
 
 def plane_bases(normals):

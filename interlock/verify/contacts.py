@@ -10,15 +10,18 @@ import shapely
 from scipy.spatial import cKDTree
 
 from interlock.blocks.assembly import NEIGHBOUR_RTOL, Assembly
-from interlock.blocks.contact import Contact, ContactError
+from interlock.blocks.contact import CONTACT_KINDS, Contact, ContactError
 from interlock.verify.facets import (DEFAULT_ANGLE_TOL, DEFAULT_CONTACT_RTOL, PLANAR_ULPS, TINY, Facets, FacetTable,
                                      check_tolerance, clean_polygons, facets)
+from interlock.verify.point_contacts import point_contacts
 from interlock.verify.precision import (BEND_FACTOR, COMPUTED_ULPS, PRECISION_FACTOR, block_precision,
                                        coordinate_precision)
 
 __all__ = [
     "Contact",
     "ContactError",
+    "CONTACT_KINDS",
+    "CONTACT_MODELS",
     "Facets",
     "contacts",
     "model_contacts",
@@ -56,6 +59,9 @@ MAX_TILT = 0.05
 #: diameter.  TopoLite's ``ania`` pieces cross by 4.6e-6 of their contact; a block grown by 2e-4 (1e-4 into its
 #: neighbours) overlaps them and is refused.
 PRESS_RTOL = 1e-5
+#: What a contact search finds: ``"faces"`` (face-to-face contacts only, Def. 3.3) or ``"all"`` (also the
+#: vertex-face, edge-edge, vertex-edge and vertex-vertex contacts of Remark 3.11).
+CONTACT_MODELS = ("faces", "all")
 #: Instanced pairs of one kind (:meth:`Assembly.pair_kinds`) share one contact computation; that path is
 #: taken when kinds are at most this share of the pairs.
 KIND_SHARE = 0.5
@@ -63,8 +69,8 @@ KIND_SHARE = 0.5
 
 def contacts(assembly: Assembly, rtol: float | None = None, angle_tol: float = DEFAULT_ANGLE_TOL,
              area_rtol: float = DEFAULT_AREA_RTOL, involving=None,
-             gap: float = DEFAULT_GAP_RTOL, precision=None, budget=None) -> tuple[Contact, ...]:
-    """All face-to-face contacts between the blocks of an assembly.
+             gap: float = DEFAULT_GAP_RTOL, precision=None, budget=None, kinds: str = "faces") -> tuple[Contact, ...]:
+    """All face-to-face contacts between the blocks of an assembly (with ``kinds="all"``: contacts of every type).
 
     Two blocks are in contact where a facet of one and a facet of the other
     lie in a common plane with opposite outward normals and overlap in a region
@@ -114,6 +120,12 @@ def contacts(assembly: Assembly, rtol: float | None = None, angle_tol: float = D
     precision : Precision, optional
         The blocks' rounding (default: read off the coordinates by
         :func:`~interlock.verify.precision.block_precision`).
+    kinds : {"faces", "all"}
+        ``"faces"`` (default): face-to-face contacts only.  ``"all"``: also
+        the vertex-face, edge-edge, vertex-edge and vertex-vertex contacts of
+        Remark 3.11 (:func:`~interlock.verify.point_contacts.point_contacts`),
+        within the same per-pair distance tolerance; those a face contact of
+        the same pair implies are left out.
     budget : Budget, optional
         A time budget (:mod:`interlock.verify.budget`), checked between blocks
         of the facet matching and before the overlaps: TimeLimitReached
@@ -196,6 +208,8 @@ def contacts(assembly: Assembly, rtol: float | None = None, angle_tol: float = D
     gap = check_tolerance("gap", gap)
     if angle_tol >= math.pi / 2:
         raise ContactError(f"angle_tol must be below pi/2 radians, got {angle_tol}")
+    if kinds not in CONTACT_MODELS:
+        raise ContactError(f"kinds must be one of {', '.join(map(repr, CONTACT_MODELS))}, got {kinds!r}")
     if len(assembly) < 2:
         return ()
     local = _tolerances(assembly, rtol, angle_tol, area_rtol, gap, precision)
@@ -207,9 +221,10 @@ def contacts(assembly: Assembly, rtol: float | None = None, angle_tol: float = D
         pairs = pairs[np.isin(pairs, assembly.block_indices(involving, "involving")).any(axis=1)]
     if not len(pairs):
         return ()
+    model = kinds
     kinds, kind_of, relative = assembly.pair_kinds(pairs)
     if len(kinds) > KIND_SHARE * len(pairs):
-        return _pair_contacts(assembly, pairs, local, budget)
+        return _pair_contacts(assembly, pairs, local, budget, kinds)
     # instanced blocks: one computation per kind of pair, on a stand-in of two blocks, moved to every pair; each
     # stand-in block takes the coarsest tolerance of the blocks it stands for
     i, j = pairs[kinds].T
@@ -221,13 +236,20 @@ def contacts(assembly: Assembly, rtol: float | None = None, angle_tol: float = D
         np.maximum.at(widest[k], 2 * kind_of, values[pairs[:, 0]])
         np.maximum.at(widest[k], 2 * kind_of + 1, values[pairs[:, 1]])
     stand_in_tolerances = _Tolerances(*widest, local.grouping, local.angle, local.gap, local.tilt)
-    computed = _pair_contacts(stand_in, np.arange(2 * len(kinds)).reshape(-1, 2), stand_in_tolerances, budget)
+    computed = _pair_contacts(stand_in, np.arange(2 * len(kinds)).reshape(-1, 2), stand_in_tolerances, budget,
+                              model)
     by_kind = {}
     for contact in computed:
         by_kind.setdefault(contact.i // 2, []).append(contact)
     found = [_moved(contact, int(a), int(b), assembly.transforms[a], assembly.mirrored[a])
              for (a, b), k in zip(pairs, kind_of) for contact in by_kind.get(int(k), ())]
-    return tuple(sorted(found, key=lambda c: (c.i, c.j, c.facet_i, c.facet_j)))
+    return tuple(sorted(found, key=_order))
+
+
+def _order(contact: Contact):
+    """Sort key: pair, faces before point contacts (by kind), facets, then the point."""
+    return (contact.i, contact.j, CONTACT_KINDS.index(contact.kind), contact.facet_i, contact.facet_j,
+            tuple(contact.vertices[0]) if contact.kind != "face" else ())
 
 
 def search_distances(assembly: Assembly, precision=None) -> np.ndarray:
@@ -293,15 +315,19 @@ class _Tolerances:
 GIVEN_CONTACTS = "contacts"
 
 
-def model_contacts(assembly: Assembly, given=None, precision=None, budget=None) -> tuple[Contact, ...]:
+def model_contacts(assembly: Assembly, given=None, precision=None, budget=None,
+                   kinds: str = "all") -> tuple[Contact, ...]:
     """The contacts a verdict uses: ``given`` if not None, else those the assembly carries, else :func:`contacts`.
+
+    ``kinds`` is the search's model (:data:`CONTACT_MODELS`): ``"all"``
+    (default) finds contacts of every type, ``"faces"`` face-to-face ones only.
 
     An assembly carries contacts in ``assembly.info[GIVEN_CONTACTS]`` when
     some of its contacts are not face to face (Remark 3.11), as
     :func:`~interlock.blocks.presets.block_on_pins` does.
 
     >>> from interlock.blocks import presets
-    >>> len(model_contacts(presets.block_on_pins())), len(model_contacts(presets.cube_grid()))
+    >>> len(model_contacts(presets.block_on_pins())), len(model_contacts(presets.cube_grid(), kinds="faces"))
     (7, 12)
     """
     if given is not None:
@@ -311,10 +337,10 @@ def model_contacts(assembly: Assembly, given=None, precision=None, budget=None) 
         if not all(isinstance(c, Contact) for c in carried):
             raise ContactError(f"assembly.info[{GIVEN_CONTACTS!r}] must hold Contact objects")
         return tuple(carried)
-    return contacts(assembly, precision=precision, budget=budget)
+    return contacts(assembly, precision=precision, budget=budget, kinds=kinds)
 
 
-def _pair_contacts(assembly, pairs, tolerances: _Tolerances, budget=None) -> tuple[Contact, ...]:
+def _pair_contacts(assembly, pairs, tolerances: _Tolerances, budget=None, kinds="faces") -> tuple[Contact, ...]:
     """Contacts of the given block pairs under the per-block ``tolerances`` (``budget`` checked between steps)."""
     table = FacetTable(assembly, tolerances.grouping, tolerances.angle, needed=np.unique(pairs))
     if budget is not None:
@@ -322,7 +348,12 @@ def _pair_contacts(assembly, pairs, tolerances: _Tolerances, budget=None) -> tup
     gi, gj, atol = _matches(table, pairs, tolerances, budget)
     if budget is not None:
         budget.check("contacts")
-    return _overlaps(table, gi, gj, atol, tolerances)
+    faces = _overlaps(table, gi, gj, atol, tolerances)
+    if kinds == "faces":
+        return faces
+    if budget is not None:
+        budget.check("contacts")
+    return faces + point_contacts(table, pairs, tolerances, faces)
 
 
 def _moved(contact: Contact, i: int, j: int, transform: np.ndarray, mirrored: bool) -> Contact:
@@ -330,6 +361,16 @@ def _moved(contact: Contact, i: int, j: int, transform: np.ndarray, mirrored: bo
     rotation, shift = transform[:3, :3], transform[:3, 3]
     basis, origin = contact.basis @ rotation.T, rotation @ contact.origin + shift
     polygon, vertices = contact.polygon, contact.vertices @ rotation.T + shift
+    if contact.kind != "face":  # a point: no polygon to reflect; the cone of normals turns with the blocks
+        if mirrored:
+            basis = basis * np.array([[1.0], [-1.0]])
+        arrays = [rotation @ contact.normal, vertices, origin, basis]
+        if contact.normals is not None:
+            arrays.append(contact.normals @ rotation.T)
+        for array in arrays:
+            array.setflags(write=False)
+        return replace(contact, i=i, j=j, normal=arrays[0], vertices=vertices, origin=origin, basis=basis,
+                       normals=arrays[4] if contact.normals is not None else None)
     if mirrored:  # keep u x v = n and counter-clockwise rings: flip v and the polygon's y
         basis = basis * np.array([[1.0], [-1.0]])
         polygon = shapely.orient_polygons(shapely.transform(polygon, lambda xy: xy * [1.0, -1.0]))

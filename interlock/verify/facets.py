@@ -133,9 +133,13 @@ class FacetTable:
             wanted[np.asarray(needed, dtype=int)] = True
         needed_types = np.unique(types[wanted]).tolist()
         atol = np.broadcast_to(np.asarray(atol, dtype=float), (len(assembly.meshes),))
-        found = (_facets_of([merged(assembly.meshes[t]) for t in needed_types], atol[needed_types], angle_tol)
-                 if needed_types else [])
+        meshes = [merged(assembly.meshes[t]) for t in needed_types]
+        found = _facets_of(meshes, atol[needed_types], angle_tol) if needed_types else []
         per_type = dict(zip(needed_types, found))
+        #: per needed mesh type: its merged mesh and its Facets (in the mesh's own frame), for the features of
+        #: point contacts (:mod:`interlock.verify.point_contacts`)
+        self.per_type, self.merged = per_type, dict(zip(needed_types, meshes))
+        self.types, self.transforms = types, assembly.transforms
         counts = np.array([len(per_type[t]) if w else 0 for t, w in zip(types, wanted)], dtype=int)
         self.start = np.concatenate([[0], np.cumsum(counts)])
         total = self.start[-1]

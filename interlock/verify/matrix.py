@@ -123,6 +123,8 @@ def interlocking_matrix(assembly: Assembly, frame=None, translational: bool = Fa
 
     blocks_i, blocks_j, points, normals, contact_of, vertex_of = [], [], [], [], [], []
     for c, contact in enumerate(found):
+        if contact.normals is not None:  # a cone of admissible normals is no row (docs/interlocking.md)
+            continue
         vertices = np.asarray(contact.vertices, dtype=float)
         if translational:
             vertices = vertices[:1]

@@ -343,7 +343,13 @@ def _gap_constraints(assembly: Assembly, found, free: set, interior_rtol: float)
         if c.i not in free and c.j not in free:
             continue
         vertices = np.asarray(c.vertices, dtype=float)
-        if len(vertices) < 3:  # point or segment contact given by hand: block j's points on block i's face
+        if c.kind == "vertex-face" and c.normals is None:  # a corner of one block strictly inside the other's face
+            on_i = c.facet_i >= 0  # the face is block i's: the corner is block j's
+            inside_i, inside_j = np.array([on_i]), np.array([not on_i])
+        elif c.kind != "face":  # edge-edge, vertex-edge, vertex-vertex: no gap function of a point on a face
+            skipped += len(vertices)
+            continue
+        elif len(vertices) < 3:  # point or segment contact given by hand: block j's points on block i's face
             inside_i, inside_j = np.ones(len(vertices), bool), np.zeros(len(vertices), bool)
         else:
             for b in (c.i, c.j):
