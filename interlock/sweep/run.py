@@ -1,17 +1,26 @@
 """Run a sweep: points in chunks on an executor, records written as they arrive, resumable.
 
 Local processes by default (:class:`concurrent.futures.ProcessPoolExecutor`,
-all cores); any :class:`concurrent.futures.Executor`; or a
+all cores, each ending when the sweep's process ends, even by ``kill -9``:
+:func:`die_with_parent`); any :class:`concurrent.futures.Executor`; or a
 ``dask.distributed.Client`` (its :meth:`get_executor`), which runs the same
 chunks on a Dask cluster.  Records go to JSON lines (``*.jsonl``) or to a
 Parquet dataset (``*.parquet``: a folder with one file per chunk, each written
 whole, through pyarrow), so an interrupted sweep resumes where it stopped.
+Resuming touches only an output that is recognisably a sweep's (its header,
+or an empty file or folder); anything else is refused and left as it was.
 """
 
 from __future__ import annotations
 
+import ctypes
 import json
+import multiprocessing
 import os
+import signal
+import sys
+import threading
+import time
 import warnings
 from concurrent.futures import FIRST_COMPLETED, Executor, ProcessPoolExecutor, wait
 from pathlib import Path
@@ -22,7 +31,8 @@ from interlock.files import atomic_write, unwritable, write_atomically
 from interlock.sweep.record import evaluate_chunk
 from interlock.sweep.spec import SweepError, SweepSpec, load_spec
 
-__all__ = ["run", "read_records", "check_size", "SweepWarning", "MAX_POINTS", "HEADER_KEY", "AHEAD"]
+__all__ = ["run", "read_records", "check_size", "die_with_parent", "SweepWarning", "MAX_POINTS", "HEADER_KEY", "AHEAD",
+           "PARENT_POLL_SECONDS"]
 
 FORMATS = (".jsonl", ".parquet")
 #: The most points :func:`run` evaluates unless ``max_points`` says more: each point and its record take
@@ -38,6 +48,12 @@ AHEAD = 1024
 HEADER_KEY = "sweep"
 # The header of a Parquet output folder.
 _PARQUET_HEADER = "sweep.json"
+#: Where the parent-death signal is not available (not Linux), a worker looks this often whether the sweep's
+#: process still lives, and ends when it does not.
+PARENT_POLL_SECONDS = 0.5
+#: The most bytes of an output's first line read to recognise it as a sweep's header (a header is ~200 bytes).
+_HEADER_BYTES = 1 << 16
+_PR_SET_PDEATHSIG = 1  # linux/prctl.h
 
 
 class SweepWarning(UserWarning):
@@ -108,7 +124,10 @@ def run(spec, output=None, executor=None, workers: int | None = None, resume: bo
         done = {}
     owned = executor is None
     if owned:
-        executor = ProcessPoolExecutor(max_workers=workers or os.cpu_count())
+        context = multiprocessing.get_context()
+        parent = os.getpid() if context.get_start_method() in ("fork", "spawn") else None  # forkserver: its child
+        executor = ProcessPoolExecutor(max_workers=workers or os.cpu_count(), mp_context=context,
+                                       initializer=die_with_parent, initargs=(parent,))
     elif hasattr(executor, "get_executor"):  # a dask.distributed.Client
         executor = executor.get_executor()
     elif not isinstance(executor, Executor):
@@ -142,6 +161,36 @@ def run(spec, output=None, executor=None, workers: int | None = None, resume: bo
         if owned:
             executor.shutdown(cancel_futures=True)
     return [done[i] for i in sorted(done)]
+
+
+def die_with_parent(parent: int | None = None) -> None:
+    """End this process when its parent ends, however that ends (``kill -9`` too): the local workers' initializer.
+
+    On Linux the kernel sends this process SIGKILL when its parent dies (``prctl(PR_SET_PDEATHSIG)``, through
+    ctypes); if the parent was already gone when that was asked for (its pid is not ``parent`` any more), the
+    process ends at once.  Elsewhere a daemon thread looks every :data:`PARENT_POLL_SECONDS` whether the parent
+    changed (the orphan is adopted by another process) and ends the process when it did.  A worker so ended
+    leaves nothing behind: its chunk's records were not written, and a resumed sweep computes them.
+    """
+    if parent is None:
+        parent = os.getppid()
+    if sys.platform.startswith("linux"):
+        try:
+            libc = ctypes.CDLL(None, use_errno=True)
+            asked = libc.prctl(_PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0) == 0
+        except (OSError, AttributeError):
+            asked = False
+        if asked:
+            if os.getppid() != parent:  # the parent died before the signal was asked for
+                os._exit(1)
+            return
+    threading.Thread(target=_watch_parent, args=(parent,), name="interlock-sweep-parent", daemon=True).start()
+
+
+def _watch_parent(parent: int) -> None:
+    while os.getppid() == parent:
+        time.sleep(PARENT_POLL_SECONDS)
+    os._exit(1)
 
 
 def _chunks(spec: SweepSpec, skipped: set):
@@ -200,12 +249,70 @@ def _writer(path: Path, resume: bool):
         raise SweepError(f"cannot write {path}: {problem}")
     if path.suffix == ".parquet" and path.exists() and not path.is_dir():
         raise SweepError(f"cannot write {path}: a Parquet output is a folder, and this is a file")
+    if os.path.islink(path):  # resume the file it names (writing would replace the link by a file)
+        try:
+            path = path.resolve(strict=True)
+        except (OSError, RuntimeError):  # missing, or a loop
+            raise SweepError(f"cannot write {path}: it is a symbolic link to nothing that exists (or a loop); "
+                             "give the file itself") from None
     if path.exists() and not resume:
         raise SweepError(f"{path} exists: resume it (--resume) or choose another output")
+    if path.exists():
+        _recognise(path)
     try:
         return (_JsonLines if path.suffix == ".jsonl" else _Parquet)(path)
     except PermissionError as error:
         raise SweepError(f"cannot write {path}: {error.strerror or error}") from None
+
+
+def _recognise(path: Path) -> None:
+    """Refuse to resume an output that is not recognisably a sweep's: before it is read further or touched.
+
+    A sweep's JSON lines start with its header line (``{"sweep": {"fingerprint": ...}}``), a Parquet output
+    folder holds that header in ``sweep.json``; an empty file or folder holds nothing to lose.  Only the
+    first line is read, so a large file of other data costs nothing to refuse.
+    """
+    if path.is_dir():
+        if not any(path.iterdir()):
+            return
+        header_path = path / _PARQUET_HEADER
+        try:
+            with header_path.open("rb") as stream:
+                header = _header_of(stream.read(_HEADER_BYTES))
+        except OSError:
+            header = None
+        if header is None:
+            raise SweepError(f"{path} is a folder that is not a sweep's Parquet output (no {_PARQUET_HEADER} with "
+                             "a sweep header); resuming would write into it: choose another output")
+        return
+    try:
+        with path.open("rb") as stream:
+            first = stream.readline(_HEADER_BYTES)
+    except OSError as error:
+        raise SweepError(f"cannot read {path}: {error.strerror or error}") from None
+    if not first or _header_of(first) is not None:
+        return
+    try:
+        record = json.loads(first)
+    except (ValueError, RecursionError):
+        record = None
+    if isinstance(record, dict) and isinstance(record.get("index"), int) and "status" in record:
+        raise SweepError(f"{path} holds records without a spec fingerprint (an older interlock, or not a sweep); "
+                         "resuming would replace them: choose another output")
+    raise SweepError(f"{path} is not a sweep's output (its first line is no sweep header); resuming would "
+                     "replace it: choose another output")
+
+
+def _header_of(line: bytes) -> dict | None:
+    """The sweep header a first line holds, or None: ``{"sweep": {..., "fingerprint": "<text>"}}``."""
+    try:
+        header = json.loads(line.decode("utf-8"))
+    except (ValueError, RecursionError):  # UnicodeDecodeError and JSONDecodeError are ValueErrors
+        return None
+    if isinstance(header, dict) and isinstance(header.get(HEADER_KEY), dict) \
+            and isinstance(header[HEADER_KEY].get("fingerprint"), str):
+        return header
+    return None
 
 
 def _header(spec: SweepSpec) -> dict:
@@ -277,10 +384,7 @@ class _JsonLines:
             raise SweepError(f"cannot read {path}: {error.strerror or error}") from None
         header = None
         if lines and lines[0].startswith(f'{{"{HEADER_KEY}"'):
-            try:
-                header = json.loads(lines.pop(0))
-            except json.JSONDecodeError:
-                header = {}
+            header = _header_of(lines.pop(0).encode("utf-8")) or {}  # {}: a damaged header
         if lines and not lines[-1].endswith("\n"):  # cut short by a killed run
             lines.pop()
         records = [_record(line, f"{path} line {k + 1 + (header is not None)}") for k, line in enumerate(lines)

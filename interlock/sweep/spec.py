@@ -355,9 +355,14 @@ def _family(data: dict, names: set) -> dict:
         if not isinstance(point, dict) or set(point) != POINT_KEYS:
             raise SweepError(f"points[{k}] needs exactly the keys {sorted(POINT_KEYS)}, got {point!r}")
         edges = len(wallpaper.group(group).side_pairings())
-        if not (isinstance(point["edge"], int) and 0 <= point["edge"] < edges):
+        edge = point["edge"]
+        if isinstance(edge, float) and edge.is_integer() and 0 <= edge < edges:
+            raise SweepError(f"points[{k}].edge is an edge's index, a whole number written without a decimal point: "
+                             f"edge = {int(edge)}, not {edge!r} ({group}'s fundamental domain has edges "
+                             f"0..{edges - 1})")
+        if isinstance(edge, bool) or not (isinstance(edge, int) and 0 <= edge < edges):
             raise SweepError(f"points[{k}].edge must be an edge of {group}'s fundamental domain, 0..{edges - 1}, "
-                             f"got {point['edge']!r}")
+                             f"got {edge!r}")
         parsed.append({"edge": _integer(point["edge"], f"points[{k}].edge", 0),
                        "along": _value(point["along"], f"points[{k}].along", names),
                        "offset": _value(point["offset"], f"points[{k}].offset", names)})
@@ -415,5 +420,7 @@ def _number(value, what: str, positive: bool = False) -> float:
 
 def _integer(value, what: str, least: int) -> int:
     if isinstance(value, bool) or not isinstance(value, int) or value < least:
-        raise SweepError(f"{what} must be an integer >= {least}, got {value!r}")
+        hint = (f" (TOML: write {int(value)}, without a decimal point)"
+                if isinstance(value, float) and value.is_integer() and value >= least else "")
+        raise SweepError(f"{what} must be an integer >= {least}, got {value!r}{hint}")
     return value

@@ -9,6 +9,7 @@ import subprocess
 import sys
 import time
 import tracemalloc
+import warnings
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
@@ -488,3 +489,138 @@ def test_cli_max_points_refuses_and_raises_the_limit(tmp_path, capsys):
     assert main(["sweep", str(spec), "-o", str(tmp_path / "x.jsonl"), "--max-points", "5"]) == 2
     assert "6 points" in capsys.readouterr().err
     assert main(["sweep", str(spec), "-o", str(tmp_path / "x.jsonl"), "--max-points", "6", "--workers", "1"]) == 0
+
+
+# --- nothing lost, nothing leaked (issue 36) ---------------------------------------------------------------
+
+#: How many times (and how long apart) a test looks for what other processes did: bounded, never a time limit.
+TRIES, PAUSE = 600, 0.1
+
+
+def _foreign_json_lines(draw_dicts):
+    return "".join(json.dumps(d) + "\n" for d in draw_dicts).encode()
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.one_of(
+    st.binary(min_size=1, max_size=2000),
+    st.lists(st.dictionaries(st.sampled_from(["user", "note", "index", "status", "sweep", "x"]),
+                             st.one_of(st.integers(), st.text(max_size=8), st.none()), min_size=1),
+             min_size=1, max_size=6).map(_foreign_json_lines),
+    st.sampled_from([b'{"user": "alice", "note": "precious"}\n{"user": "bob"}\n', b'{"sweep": "my notes"}\n',
+                     b'{"sweep": {"name": "mine"}}\nfree text\n', b"\n", b"[1, 2, 3]\n" * 3, b"\xff\xfe\x00"])))
+def test_resume_refuses_a_file_that_is_not_a_sweeps_and_leaves_it_byte_identical(tmp_path_factory, data):
+    out = tmp_path_factory.mktemp("foreign") / "results.jsonl"
+    out.write_bytes(data)
+    calls = []
+    with pytest.raises(SweepError, match="not a sweep's output|records without a spec fingerprint"), \
+            warnings.catch_warnings():
+        warnings.simplefilter("error", SweepWarning)  # refused before any line is read as a record
+        _threads(SMALL, output=out, resume=True, progress=calls.append)
+    assert out.read_bytes() == data and calls == []
+    assert sorted(p.name for p in out.parent.iterdir()) == ["results.jsonl"]
+
+
+def test_cli_resume_of_a_foreign_json_lines_file_is_one_line_and_the_file_is_unchanged(tmp_path):
+    spec, out = tmp_path / "p1.toml", tmp_path / "r.jsonl"
+    spec.write_text(_toml({**P1, "verdicts": ["criterion_4_3"],
+                           "parameters": {"s": {"range": [-0.2, 0.2], "steps": 2}, "u": {"range": [0.1, 0.2],
+                                                                                         "steps": 2}}}))
+    data = b'{"user": "alice", "note": "precious"}\n{"user": "bob"}\n'
+    out.write_bytes(data)
+    done = subprocess.run([sys.executable, "-m", "interlock", "sweep", str(spec), "-o", str(out), "--resume",
+                           "--workers", "1"], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 2 and done.stderr.count("\n") == 1, done.stderr
+    assert "is not a sweep's output" in done.stderr and "warning" not in done.stderr
+    assert out.read_bytes() == data
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["p1.toml", "r.jsonl"]
+
+
+def test_resume_into_a_folder_that_is_not_a_sweeps_parquet_output_is_refused(tmp_path):
+    folder = tmp_path / "results.parquet"
+    folder.mkdir()
+    (folder / "notes.txt").write_text("precious")
+    with pytest.raises(SweepError, match="not a sweep's Parquet output"):
+        _threads(SMALL, output=folder, resume=True)
+    assert [p.name for p in folder.iterdir()] == ["notes.txt"]
+
+
+def test_an_empty_file_and_a_link_to_a_sweeps_output_are_resumed(tmp_path):
+    empty = tmp_path / "empty.jsonl"
+    empty.touch()
+    assert len(_threads(SMALL, output=empty, resume=True)) == 2 and len(read_records(empty)) == 2
+    real, link = tmp_path / "real.jsonl", tmp_path / "link.jsonl"
+    first = _threads({**SMALL, "parameters": {**SMALL["parameters"], "s": {"values": [-0.2]}}}, output=real)
+    link.symlink_to(real)
+    again = _threads(SMALL, output=link, resume=True)
+    assert again[:1] == first and link.is_symlink() and len(read_records(real)) == 2
+    loop = tmp_path / "loop.jsonl"
+    loop.symlink_to(loop)
+    with pytest.raises(SweepError, match="symbolic link to nothing"):
+        _threads(SMALL, output=loop, resume=True)
+
+
+@pytest.mark.parametrize("edge, message", [
+    (0.0, r"edge = 0, not 0\.0"),
+    (True, "must be an edge of p1's fundamental domain, 0..3, got True"),
+    (2.5, "got 2.5"),
+])
+def test_an_edge_that_is_no_whole_number_is_named_as_such(edge, message):
+    with pytest.raises(SweepError, match=message):
+        load_spec({**SMALL, "points": [{"edge": edge, "along": 0.5, "offset": "s"}]})
+
+
+def test_the_example_specs_name_the_partner_edges_the_group_has():
+    from pathlib import Path
+
+    from interlock import wallpaper
+
+    for spec in (Path(__file__).resolve().parents[2] / "docs" / "sweeps").glob("*.toml"):
+        text = spec.read_text()
+        claims = re.findall(r"edge (\d+) \(paired with edge (\d+)", text.replace("\n# ", " "))
+        group = wallpaper.group(load_spec(spec).family["group"])
+        for edge, partner in claims:
+            assert group.side_pairings()[int(edge)].partner == int(partner), spec.name
+
+
+def _alive(pid: int) -> bool:
+    import psutil
+
+    try:
+        return psutil.Process(pid).status() != psutil.STATUS_ZOMBIE
+    except psutil.NoSuchProcess:
+        return False
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="the parent-death signal is Linux's; elsewhere a poll")
+def test_workers_end_when_the_sweep_is_killed_with_sigkill(tmp_path):
+    psutil = pytest.importorskip("psutil")
+    spec = {**P4, "verdicts": ["periodic"], "chunk": 1,
+            "parameters": {"t": {"range": [0.2, 0.8], "steps": 40}, "s": {"range": [-0.4, 0.4], "steps": 40}}}
+    spec_path, out = tmp_path / "spec.toml", tmp_path / "out.jsonl"
+    spec_path.write_text(_toml(spec))
+    process = subprocess.Popen([sys.executable, "-m", "interlock", "sweep", str(spec_path), "-o", str(out),
+                                "--workers", "2"], start_new_session=True, stdout=subprocess.DEVNULL,
+                               stderr=subprocess.DEVNULL)
+    workers = []
+    try:
+        for _ in range(TRIES):  # until both workers run and records arrive
+            workers = [child.pid for child in psutil.Process(process.pid).children()]
+            if len(workers) >= 2 and out.exists() and out.read_text().count("\n") >= 3:
+                break
+            time.sleep(PAUSE)
+        assert len(workers) == 2, "the sweep should run two workers"
+        os.kill(process.pid, signal.SIGKILL)  # the sweep alone, not its process group
+        process.wait()
+        for _ in range(TRIES):
+            if not any(_alive(pid) for pid in workers):
+                break
+            time.sleep(PAUSE)
+        assert not [pid for pid in workers if _alive(pid)], "workers outlived the sweep"
+    finally:
+        for pid in workers + [process.pid]:  # whatever is left of what this test started
+            try:
+                os.kill(pid, signal.SIGKILL)
+            except ProcessLookupError:
+                pass
+        process.wait()
