@@ -13,6 +13,7 @@ from interlock.errors import GalleryError
 from interlock.gallery.appearance import PALETTE, as_assembly
 from interlock.gallery.view.collapse import collapse_twists
 from interlock.gallery.view.words import details, plain_sentence
+from interlock.verify.contacts import contacts as find_contacts
 from interlock.verify.motion import twist_exponential
 
 __all__ = ["scene", "MOTION_STEPS", "FIRST_ORDER_REACH", "TURN_REACH", "FRAME_COLOUR", "MOVING_COLOUR",
@@ -56,8 +57,10 @@ def scene(obj, verdict=None, stability=None, *, title: str | None = None, contac
         (unless the verdict already has one).
     title : str, optional
     contacts : sequence of Contact, optional
-        Used for each block's list of contacts; default: the blocks whose boxes
-        touch (:attr:`Assembly.neighbours <interlock.blocks.Assembly.neighbours>`).
+        Used for each block's list of contacts; default: with a verdict, the
+        face contacts of :func:`~interlock.verify.contacts` (as the verdict
+        found them), else the blocks whose boxes touch
+        (:attr:`Assembly.neighbours <interlock.blocks.Assembly.neighbours>`).
     frame_words : str, optional
         How the plain sentence names the frame (e.g. "the outer ring").
 
@@ -77,12 +80,14 @@ def scene(obj, verdict=None, stability=None, *, title: str | None = None, contac
     >>> s["blocks"]["count"], s["blocks"]["frame"], s["motion"]["moving"], s["motion"]["kind"]
     (9, [0, 1, 2, 3, 5, 6, 7, 8], [4], 'first-order')
     >>> s["sentence"]
-    'With blocks 0-3 and 5-8 fixed, block 4 can start to move straight up: no contact stops it at first order.'
+    'With the outer ring (8 blocks) fixed, block 4 can start to move straight up: no contact stops it at first order.'
     """
     assembly = as_assembly(obj)
     if len(assembly) == 0:
         raise GalleryError("the assembly has no blocks: there is nothing to view")
     frame = tuple(int(b) for b in (verdict.frame if verdict is not None else assembly.frame))
+    if contacts is None and verdict is not None:
+        contacts = find_contacts(assembly)
     bounds = assembly.bounds
     low, high = bounds[:, 0].min(axis=0), bounds[:, 1].max(axis=0)
     offset = (low + high) / 2

@@ -89,7 +89,7 @@
     var scene = this.scene = new THREE.Scene();
     var camera = this.camera = new THREE.PerspectiveCamera(35, 1, data.size * 1e-3, data.size * 50);
     camera.up.set(0, 0, 1);
-    camera.position.set(data.size * 0.9, -data.size * 1.3, data.size * 1.0);
+    camera.position.set(data.size * 0.55, -data.size * 0.85, data.size * 0.8);
     camera.lookAt(0, 0, 0);
     scene.add(new THREE.HemisphereLight(0xffffff, 0x8a8a8a, 2.2));
     var sun = new THREE.DirectionalLight(0xffffff, 1.6);
@@ -205,7 +205,8 @@
     shaft.translate(0, 0.5, 0);
     var head = new THREE.ConeGeometry(radius * 2.6, 1, 12);
     head.translate(0, 0.5, 0);
-    var material = new THREE.MeshStandardMaterial({ roughness: 0.6, metalness: 0.0 });
+    var material = new THREE.MeshStandardMaterial({ roughness: 0.6, metalness: 0.0, depthTest: false,
+                                                   transparent: true, opacity: 0.9 });
     var shafts = new THREE.InstancedMesh(shaft, material, forces.count);
     var heads = new THREE.InstancedMesh(head, material, forces.count);
     var m = new THREE.Matrix4(), q = new THREE.Quaternion(), y = new THREE.Vector3(0, 1, 0);
@@ -228,8 +229,7 @@
     }
     [shafts, heads].forEach(function (mesh) {
       mesh.frustumCulled = false;
-      mesh.material.depthTest = true;
-      mesh.renderOrder = 2;
+      mesh.renderOrder = 2;  // drawn over the blocks: a force acts inside the joint, where the blocks hide it
     });
     this.forces = new THREE.Group();
     this.forces.add(shafts, heads);
@@ -282,6 +282,19 @@
     var at = this.where[block], m = new THREE.Matrix4();
     this.meshes[at[0]].getMatrixAt(at[1], m);
     return m.toArray();
+  };
+
+  View.prototype.blockCentre = function (block) {  // the centre of the block's box, where it is now (scene units)
+    var at = this.where[block], mesh = this.meshes[at[0]], m = new THREE.Matrix4(), c = new THREE.Vector3();
+    if (!mesh.geometry.boundingBox) mesh.geometry.computeBoundingBox();
+    mesh.geometry.boundingBox.getCenter(c);
+    mesh.getMatrixAt(at[1], m);
+    return c.applyMatrix4(m).toArray();
+  };
+
+  View.prototype.screenOf = function (x, y, z) {  // a world point's pixel on the canvas, from its top left
+    var p = new THREE.Vector3(x, y, z).project(this.camera), box = this.renderer.domElement.getBoundingClientRect();
+    return [(p.x + 1) / 2 * box.width, (1 - p.y) / 2 * box.height];
   };
 
   View.prototype.play = function (on) {

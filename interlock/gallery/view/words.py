@@ -92,7 +92,7 @@ def plain_sentence(assembly, verdict=None, stability=None, frame_words: str | No
     >>> from interlock.blocks import presets
     >>> from interlock.verify import check
     >>> plain_sentence(presets.interlocking_cubes(), check(presets.interlocking_cubes()))
-    'With the 8 fixed blocks held, none of the 1 other blocks can move.'
+    'With the outer ring (8 blocks) fixed, the other block cannot move.'
     """
     parts = []
     if verdict is not None:
@@ -104,12 +104,14 @@ def plain_sentence(assembly, verdict=None, stability=None, frame_words: str | No
     return " ".join(parts)
 
 
-def _frame_words(frame, frame_words) -> str:
+def _frame_words(assembly, frame, frame_words) -> str:
+    if not frame_words and len(frame) > 2 and set(frame) == set(assembly.boundary()):
+        frame_words = "the outer ring"
     if frame_words:
         return f"{frame_words} ({len(frame)} blocks)" if len(frame) > 1 else frame_words
     if len(frame) <= 8:
         return blocks_words(frame)
-    return f"the {len(frame)} fixed blocks"
+    return f"the {len(frame)} frame blocks"
 
 
 def _kinematic(assembly, verdict, frame_words) -> str:
@@ -117,7 +119,7 @@ def _kinematic(assembly, verdict, frame_words) -> str:
     if not frame:
         return ("With no block fixed, the whole assembly can move as one: give a frame (the blocks held fixed) "
                 "to ask whether the others interlock.")
-    held = f"With {_frame_words(frame, frame_words)} fixed"
+    held = f"With {_frame_words(assembly, frame, frame_words)} fixed"
     others = len(assembly) - len(frame)
     second = verdict.second_order is not None and getattr(verdict.second_order, "blocked", False)
     if verdict.interlocked is True:
