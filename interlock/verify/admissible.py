@@ -9,7 +9,10 @@ such a motion a property of the model and not of the blocks:
   be blocked by the real bend (:func:`unless_bent`);
 - contacts given by the caller, found with tolerances below the input's
   noise, miss faces that really touch; a motion that pushes into one of them
-  is no motion at all (:func:`unless_missed`).
+  is no motion at all (:func:`unless_missed`);
+- a vertex-edge, vertex-vertex or parallel-edge touch admits a cone of
+  normals, which gives no row of ``A``; a motion that presses into it along
+  every normal of the cone is no motion either (:func:`unless_cones`).
 
 Either way the verdict becomes inconclusive (``interlocked`` None) and says
 why (docs/interlocking.md, "Margin and tolerance").
@@ -26,7 +29,8 @@ import scipy.sparse as sp
 from interlock.verify.margin import BEND_FACTOR, row_tolerances
 from interlock.verify.matrix import InterlockingMatrix, interlocking_matrix
 
-__all__ = ["moving_names", "rigid_across_bends", "unless_bent", "unless_missed", "bent_contacts", "MOVING_RTOL"]
+__all__ = ["moving_names", "rigid_across_bends", "unless_bent", "unless_missed", "unless_cones", "cone_pressure",
+           "bent_contacts", "MOVING_RTOL"]
 
 #: Blocks whose twist is below this fraction of the largest one do not move.
 MOVING_RTOL = 1e-6
@@ -163,3 +167,52 @@ def unless_missed(verdict, assembly, reference, tolerance: float):
             "search finds a contact that the given contacts lack: their tolerances are below the input's noise; "
             "use the default contacts or larger rtol/angle_tol"))
     return unless_bent(verdict, A, reference, bent_contacts(reference, tolerance), assembly.centroids)
+
+
+def cone_pressure(motion, found, centroids) -> np.ndarray:
+    """Per contact of ``found``: how far ``motion`` presses into it along its least pressed admissible normal.
+
+    ``motion`` is one world twist ``(omega, t)`` per block about its centroid.
+    For a contact with normals ``n_k`` (its cone, or its one normal) at the
+    point ``p``, the value is ``-max_k n_k . (v_j(p) - v_i(p))``: positive when
+    every admissible normal sees block ``j`` move into block ``i``, which no
+    admissible motion does to first order (main paper Remark 3.11).
+    """
+    motion = np.asarray(motion, dtype=float)
+    out = np.zeros(len(found))
+    for k, c in enumerate(found):
+        p = np.asarray(c.vertices, dtype=float)[0]
+        v = [np.cross(motion[b, :3], p - centroids[b]) + motion[b, 3:] for b in (c.i, c.j)]
+        normals = np.asarray(c.normal if c.normals is None else c.normals, dtype=float).reshape(-1, 3)
+        out[k] = -float((normals @ (v[1] - v[0])).max())
+    return out
+
+
+def unless_cones(verdict, found, centroids):
+    """The "not interlocked" verdict, or an inconclusive one when its motion presses into a cone of normals.
+
+    A vertex-edge, vertex-vertex or parallel-edge touch admits a cone of
+    normals (:attr:`~interlock.blocks.contact.Contact.normals`): to first
+    order, some normal of the cone must see the blocks part or slide, which
+    is no linear row of ``A``.  A motion of ``A`` that presses the blocks
+    together along every normal of such a cone (by more than
+    :data:`MOVING_RTOL` of the motion) is no first-order motion of the
+    blocks.  A sliding motion may be reversed; when its reverse presses into
+    no cone it is the answer.  Otherwise the verdict becomes None, naming
+    the contact.
+    """
+    cones = [c for c in found if c.normals is not None and c.kind != "face"]
+    if verdict.motion is None or not cones:
+        return verdict
+    pressure = cone_pressure(verdict.motion, cones, centroids)
+    if pressure.max() <= MOVING_RTOL:
+        return verdict
+    if verdict.motion_kind == "sliding" and cone_pressure(-verdict.motion, cones, centroids).max() <= MOVING_RTOL:
+        return dataclasses.replace(verdict, motion=-verdict.motion)
+    worst = cones[int(np.argmax(pressure))]
+    pressed = int((pressure > MOVING_RTOL).sum())
+    return dataclasses.replace(verdict, interlocked=None, status=(
+        f"floating point is not conclusive: {moving_names(verdict.moving)} a first-order {verdict.motion_kind} "
+        f"motion of the rows of A, but it presses into {pressed} {worst.kind} contact(s) along every admissible "
+        f"normal (blocks {worst.i}-{worst.j}: a cone of {len(worst.normals)} normals, which gives no row of A); "
+        "other motions were not searched"))

@@ -224,7 +224,7 @@ def contacts(assembly: Assembly, rtol: float | None = None, angle_tol: float = D
     model = kinds
     kinds, kind_of, relative = assembly.pair_kinds(pairs)
     if len(kinds) > KIND_SHARE * len(pairs):
-        return _pair_contacts(assembly, pairs, local, budget, kinds)
+        return _pair_contacts(assembly, pairs, local, budget, model)
     # instanced blocks: one computation per kind of pair, on a stand-in of two blocks, moved to every pair; each
     # stand-in block takes the coarsest tolerance of the blocks it stands for
     i, j = pairs[kinds].T

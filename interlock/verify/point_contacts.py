@@ -11,7 +11,8 @@ from scipy.spatial import cKDTree
 
 from interlock.blocks.contact import Contact, plane_bases
 
-__all__ = ["Features", "features", "point_contacts", "admissible_normals", "implied_by_faces", "POINT_KINDS",
+__all__ = ["Features", "features", "point_contacts", "admissible_normals", "implied_by_faces", "contact_kinds",
+           "POINT_KINDS",
            "LINEAR_KINDS", "CONE_ANGLE"]
 
 #: The kinds a point contact can have (a point of zero area; see :data:`~interlock.blocks.contact.CONTACT_KINDS`).
@@ -201,6 +202,24 @@ def point_contacts(table, pairs, tolerances, faces=()) -> tuple[Contact, ...]:
         for kind, point, normals, gap, facet_i, facet_j in kept:
             found.append(_contact(i, j, kind, point, normals, gap, facet_i, facet_j, rounding, coincide))
     return tuple(found)
+
+
+def contact_kinds(found) -> dict:
+    """How many contacts of each kind ``found`` holds; a cone of normals counts as ``"<kind> (cone)"``.
+
+    >>> from interlock.blocks import presets
+    >>> from interlock.verify.contacts import contacts
+    >>> contact_kinds(contacts(presets.cube_grid(), kinds="all"))
+    {'face': 12, 'vertex-vertex (cone)': 16}
+    """
+    counts = {}
+    for c in found:
+        key = c.kind if c.normals is None else f"{c.kind} (cone)"
+        counts[key] = counts.get(key, 0) + 1
+    return dict(sorted(counts.items(), key=lambda item: (_KIND_ORDER.index(item[0].split(" ")[0]), item[0])))
+
+
+_KIND_ORDER = ("face",) + POINT_KINDS
 
 
 # --- private helpers --------------------------------------------------------------------------------
