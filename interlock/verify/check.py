@@ -15,13 +15,15 @@ from threadpoolctl import threadpool_limits
 from interlock.blocks.assembly import Assembly
 from interlock.errors import InterlockError
 from interlock.verify.admissible import (MOVING_RTOL, bent_contacts, moving_names, rigid_across_bends, unless_bent,
-                                         unless_missed)
+                                         unless_cones, unless_missed)
+from interlock.verify.point_contacts import contact_kinds
 from interlock.verify.budget import Budget, TimeLimitReached
 from interlock.verify.first_order import (DENSE_COLUMNS, FARKAS_CLOSED_RTOLS, FIRST_KERNEL_PROBE, GRAM_RESOLUTION,
                                          GRAM_SURE_RTOL, INVERSE_ITERATIONS, LP_TOL, MAX_KERNEL_PROBE,
                                          PROJECTION_ROUNDS, RANK_CLEAR_RTOL, SOLVER_THREADS, matrix_rank,
                                          motion_lp, opening_motion, positive_stress)
-from interlock.verify.contacts import PRESS_RTOL, Contact, contacts as find_contacts, model_contacts, search_distances
+from interlock.verify.contacts import (CONTACT_MODELS, PRESS_RTOL, Contact, contacts as find_contacts, model_contacts,
+                                      search_distances)
 from interlock.verify.load_paths import load_path_bound
 from interlock.verify.margin import Margin, assess
 from interlock.verify.precision import PRECISION_FACTOR, Precision, block_precision
@@ -80,6 +82,7 @@ class Verdict:
     translational: bool = False
     contacts: int = 0
     bent_contacts: int = 0
+    contact_kinds: dict = field(default_factory=dict)  # contacts per kind (Remark 3.11); "<kind> (cone)": no row
     tolerances: dict = field(default_factory=dict)
     timings: dict = field(default_factory=dict)
     order: int = 1
@@ -97,7 +100,10 @@ class Verdict:
             word = "not interlocked (finite motion shown)"
         exact_only = self.margin is not None and math.isfinite(self.margin.lower)  # the tolerance matters
         cert = (", certified" + (" for the exact input only" if exact_only else "")) if self.certified else ""
-        return f"{word}{cert}: {self.status} (A {self.shape[0]}x{self.shape[1]}, rank {self.rank})"
+        kinds = ""
+        if any(k != "face" and not k.endswith("(cone)") for k in self.contact_kinds):  # point contacts gave rows
+            kinds = "; contacts: " + ", ".join(f"{n} {k}" for k, n in self.contact_kinds.items())
+        return f"{word}{cert}: {self.status} (A {self.shape[0]}x{self.shape[1]}, rank {self.rank}{kinds})"
 
     def __bool__(self):
         raise TypeError("the truth value of a Verdict is ambiguous: it may be inconclusive; use verdict.interlocked "
@@ -120,6 +126,7 @@ class Verdict:
             "translational": self.translational,
             "contacts": self.contacts,
             "bent_contacts": self.bent_contacts,
+            "contact_kinds": dict(self.contact_kinds),
             "tolerances": dict(self.tolerances),
             "timings": dict(self.timings),
             "order": self.order,
@@ -158,11 +165,14 @@ def check(assembly: Assembly, frame=None, translational: bool = False, certify: 
         Re-check the verdict rigorously (:mod:`interlock.verify.certify`).
     rank_rtol, lp_tol : float
         Tolerances (see :data:`RANK_RTOL`, :data:`LP_TOL`); reported in the verdict.
-    contacts : sequence of Contact, optional
+    contacts : sequence of Contact, "all" or "faces", optional
         Precomputed contacts (e.g. to check several frames).  Default: the
         contacts the assembly carries (``info["contacts"]``, e.g.
         :func:`~interlock.blocks.presets.block_on_pins`), else the search of
-        :func:`~interlock.verify.contacts.contacts`.
+        :func:`~interlock.verify.contacts.contacts` for contacts of every
+        type (Remark 3.11: vertex-face, edge-edge, vertex-edge, vertex-vertex
+        besides faces; ``"all"``).  ``"faces"``: face-to-face contacts only.
+        ``contact_kinds`` of the verdict counts the contacts of each type.
     validate : bool
         First check that no two blocks overlap (:func:`~interlock.verify.validate.validate`).
     progress : callable, optional
@@ -245,10 +255,10 @@ def _check_arguments(assembly, lp_solver, order, rank_rtol, lp_tol, tolerance, c
                                   or not math.isfinite(tolerance) or tolerance < 0):
         raise InterlockError(f"tolerance must be a finite length >= 0 in model units (or None: read off the input's "
                              f"rounding), got {tolerance!r}")
-    if contacts is not None:
+    if contacts is not None and not (isinstance(contacts, str) and contacts in CONTACT_MODELS):
         if isinstance(contacts, (str, bytes)) or not hasattr(contacts, "__iter__"):
             raise InterlockError(f"contacts must be a sequence of Contact (from interlock.verify.contacts), "
-                                 f"got {type(contacts).__name__}")
+                                 f"'all' or 'faces', got {contacts!r:.60}")
         wrong = next((c for c in contacts if not isinstance(c, Contact)), None)
         if wrong is not None:
             raise InterlockError(f"contacts must hold Contact objects (from interlock.verify.contacts), "
@@ -258,6 +268,7 @@ def _check_arguments(assembly, lp_solver, order, rank_rtol, lp_tol, tolerance, c
 def _decide(assembly, frame, translational, certify, rank_rtol, lp_tol, contacts, validate, progress, lp_solver,
             order, tolerance, budget, timings) -> Verdict:
     """The body of :func:`check` after its arguments were checked; raises TimeLimitReached when ``budget`` is spent."""
+    kinds, contacts = (contacts, None) if isinstance(contacts, str) else ("all", contacts)  # the contact model
     precision = block_precision(assembly)
     distance = search_distances(assembly, precision)
     coarse = _too_coarse(assembly, frame, precision)
@@ -268,7 +279,7 @@ def _decide(assembly, frame, translational, certify, rank_rtol, lp_tol, contacts
                                    "tolerance_from": precision.describe()})
     with _stage(timings, "validate" if validate else "contacts", progress, budget):
         # the contacts first: the noise and bends their faces show widen each block's tolerance for overlaps
-        found = model_contacts(assembly, contacts, precision, budget)
+        found = model_contacts(assembly, contacts, precision, budget, kinds)
         if validate:
             # a re-meshed or noisy block whose faces lie where they were may not overlap by a boolean's volume
             # alone: its measured depth must pass what its contacts accept (at least PRESS_RTOL of the block)
@@ -293,7 +304,9 @@ def _decide(assembly, frame, translational, certify, rank_rtol, lp_tol, contacts
     # faces bent within the rounding the numbers show are planar as far as the input can tell; a bend beyond it
     # (even one computed float64 geometry might explain) may block a slide
     bent = bent_contacts(found, contact_tolerances(found, precision, tolerance, bends=False))
-    base = dict(frame=fixed, shape=A.shape, translational=translational, contacts=len(found),
+    rows_of = sum(c.normals is None for c in found)  # a cone of normals is no row (contact_kinds counts it)
+    base = dict(frame=fixed, shape=A.shape, translational=translational, contacts=rows_of,
+                contact_kinds=contact_kinds(found),
                 bent_contacts=int(bent.sum()), tolerances=tolerances, timings=timings)
     if len(A.free) == 0:
         return Verdict(True, "every block is in the frame: nothing can move", rank=0, lp_value=0.0, **base)
@@ -340,6 +353,7 @@ def _decide(assembly, frame, translational, certify, rank_rtol, lp_tol, contacts
         if contacts is not None:  # the caller's contacts may miss faces that touch: the default search is the judge
             motions = [_unless_missed(v, assembly, precision, tolerance) if v.interlocked is False else v
                        for v in motions]
+        motions = [unless_cones(v, found, assembly.centroids) if v.interlocked is False else v for v in motions]
         verdict = next((v for v in motions if v.interlocked is False), motions[0])
     elif stress is not None and rank_clear:
         verdict = Verdict(True, f"positive self-stress on all {A.shape[0]} rows and full column rank",
