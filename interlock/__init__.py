@@ -1,12 +1,19 @@
 """interlock: interlocking assemblies of rigid blocks.
 
 Generate assemblies with crystallographic symmetry (``interlock.wallpaper``,
-``interlock.blocks``), export them (``interlock.gallery``) and prove or
-disprove that they interlock (``interlock.verify``).
+``interlock.blocks``), read and write them (``interlock.read``,
+``interlock.write``: ``interlock.formats``), prove or disprove that they
+interlock (``interlock.check``: ``interlock.verify``) and draw them
+(``interlock.gallery``).
+
+Every name and submodule is imported on first use (PEP 562,
+:func:`lazy_exports`), so ``import interlock`` loads no numpy.
 
 >>> import interlock
 >>> interlock.wallpaper.group("p6").point_group_order
 6
+>>> print(interlock.check(interlock.blocks.presets.cube_grid()))  # doctest: +ELLIPSIS
+not infinitesimally interlocked: block 4 has a first-order motion...
 """
 
 __version__ = "0.1.0"
@@ -15,10 +22,14 @@ import importlib
 import sys
 import types
 
-from interlock import wallpaper  # numpy and shapely, which every command uses (the CLI's group names too)
-from interlock.errors import GalleryError, GroupError, InterlockError, LatticeError
+from interlock.errors import AssemblyError, GalleryError, GroupError, InterlockError, LatticeError
 
-__all__ = ["InterlockError", "GroupError", "LatticeError", "GalleryError", "wallpaper", "__version__"]
+__all__ = ["read", "write", "check", "Assembly", "InterlockError", "GroupError", "LatticeError", "AssemblyError",
+           "GalleryError", "wallpaper", "blocks", "formats", "verify", "gallery", "sweep", "__version__"]
+
+# where each exported name lives (the submodules load by their names)
+_HOMES = {**dict.fromkeys(["read", "write"], "interlock.formats.readwrite"), "check": "interlock.verify.check",
+          "Assembly": "interlock.blocks.assembly"}
 
 
 class LazyPackage(types.ModuleType):
@@ -77,3 +88,6 @@ def lazy_exports(package: str, homes: dict[str, str], fallback=None):
 
     return __getattr__, __dir__
 
+
+
+__getattr__, __dir__ = lazy_exports(__name__, _HOMES)

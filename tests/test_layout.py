@@ -12,8 +12,8 @@ import pytest
 PACKAGE = Path(__file__).resolve().parents[1] / "interlock"
 #: Data flows one way (docs/architecture.md): a module may import its own layer and the layers below.
 LAYERS = {"interlock.errors": 0, "interlock.deprecation": 0, "interlock.wallpaper": 1, "interlock.blocks": 2,
-          "interlock.verify": 3, "interlock.gallery": 4, "interlock.sweep": 4, "interlock.cli": 5,
-          "interlock.__main__": 6, "interlock": 1}
+          "interlock.formats": 3, "interlock.verify": 4, "interlock.gallery": 5, "interlock.sweep": 5,
+          "interlock.cli": 6, "interlock.__main__": 7, "interlock": 1}
 
 
 def _modules() -> dict[str, Path]:
@@ -72,7 +72,7 @@ def test_importing_the_verifier_imports_no_module_twice():
             "        if name.startswith('interlock') and name in seen: print('again', name)\n"
             "        seen.append(name)\n"
             "sys.meta_path.insert(0, Watch())\n"
-            "import interlock.verify\n"
+            "from interlock.verify import check\n"
             "print(len(seen))\n")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert "again" not in out and int(out.split()[-1]) > 20
@@ -124,8 +124,44 @@ OLD_PATHS = [
     ("interlock.verify", "export_motion", "interlock.gallery.motion"),
     ("interlock.verify.motion", "export_motion", "interlock.gallery.motion"),
     ("interlock.verify.motion", "FRAME_FORMATS", "interlock.gallery.motion"),
-    ("interlock.blocks.compas", "load_compas", "interlock.blocks"),
+    # issue 37: one module per format under interlock.formats
+    *[("interlock.blocks.compas", n, "interlock.formats.compas")
+      for n in ("load_compas", "read_compas", "write_compas", "fingerprint", "UPSTREAM_SUPPORTS",
+                "UPSTREAM_FINGERPRINTS", "FINGERPRINT_ROUNDING", "COMPAS_DTYPES", "BLOCK_DTYPE", "GRAPH_DTYPE",
+                "INFO_ATTRIBUTE")],
+    *[("interlock.blocks.rhino", n, "interlock.formats.rhino")
+      for n in ("write_3dm", "read_3dm_blocks", "RhinoError", "FRAME_LAYER", "MARKER_KEY", "INFO_KEY",
+                "MISSING_MESSAGE", "RHINO_VERSION", "LAYER_COLOURS")],
+    *[(old, n, "interlock.formats.common") for old in ("interlock.blocks.meshformat", "interlock.blocks.meshfiles")
+      for n in ("MeshFile", "file_header", "HEADER_MARKER", "STL_RECORD", "BLOCK_DATA", "FIXED_DATA", "FIXED_WORD",
+                "STL_FIXED_BIT", "STL_MAX_FRAMED", "OBJ_SECOND_LINE", "OBJ_LABEL", "OBJ_INFO", "LABELS_KEY",
+                "INFO_KEY", "GLTF_TO_Z_UP", "GLTF_SUFFIXES")],
+    *[("interlock.blocks.meshformat", n, "interlock.formats.common")
+      for n in ("header_counts", "flagged_name", "named_frame", "touching_bodies", "json_value", "is_label_pair",
+                "stored_meaning")],
+    ("interlock.blocks.meshfiles", "read_mesh_file", "interlock.formats"),
+    ("interlock.gallery.export", "FORMATS", "interlock.formats"),
+    ("interlock.gallery.export", "LABELLED_FORMATS", "interlock.formats"),
+    ("interlock.gallery.export", "STL_MAX_BLOCKS", "interlock.formats.stl"),
 ]
+
+
+@pytest.mark.parametrize("call", ["Assembly.load", "interlock.blocks.load_compas", "interlock.blocks.load_3dm",
+                                  "interlock.gallery.export"])
+def test_the_old_ways_in_and_out_warn_and_forward(call, tmp_path):
+    import interlock
+    from interlock.blocks import presets
+
+    grid = presets.cube_grid()
+    suffix = {"interlock.blocks.load_compas": ".json", "interlock.blocks.load_3dm": ".3dm"}.get(call, ".obj")
+    path = interlock.write(grid, tmp_path / f"grid{suffix}")
+    old = {"Assembly.load": interlock.blocks.Assembly.load, "interlock.blocks.load_compas": interlock.blocks.load_compas,
+           "interlock.blocks.load_3dm": interlock.blocks.load_3dm,
+           "interlock.gallery.export": lambda p: interlock.gallery.export(grid, p)}[call]
+    with pytest.warns(DeprecationWarning, match=f"{call} moved to .*interlock.formats.*removed in interlock 0.3"):
+        result = old(path)
+    back = interlock.read(result) if call == "interlock.gallery.export" else result
+    assert len(back) == len(grid) and back.frame == grid.frame
 
 
 @pytest.mark.parametrize("old, name, new", OLD_PATHS, ids=[f"{o}.{n}" for o, n, _ in OLD_PATHS])

@@ -2,26 +2,23 @@
 
 from __future__ import annotations
 
-import os
+import importlib
+import sys
 import warnings
 from collections.abc import Sequence
 from functools import cached_property
-from pathlib import Path
 
 import networkx as nx
 import numpy as np
 import shapely
 import trimesh
 
-from interlock.blocks.compas import read_compas
-from interlock.blocks.info import restored
-from interlock.blocks.meshfiles import BLOCK_DATA, HEADER_MARKER, STL_RECORD, read_mesh_file
+from interlock import deprecation
 from interlock.blocks.repair import TJUNCTION_RTOL, consistently_wound, split_t_junctions, unmatched_edges
-from interlock.blocks.rhino import FRAME_LAYER, read_3dm_blocks
 from interlock.errors import AssemblyError
 
 __all__ = ["Assembly", "AssemblyError", "load_compas", "load_3dm", "NEIGHBOUR_RTOL", "RIGID_TOL", "KIND_DECIMALS",
-           "HEADER_MARKER", "STL_RECORD", "BLOCK_DATA", "MAX_COORDINATE"]
+           "MAX_COORDINATE"]
 
 #: Bounding boxes closer than this (relative to the model size) count as touching.
 NEIGHBOUR_RTOL = 1e-6
@@ -108,102 +105,23 @@ class Assembly:
 
     @classmethod
     def load(cls, paths, frame=None, progress=None) -> Assembly:
-        """Blocks from mesh files (OBJ, STL, PLY, GLB, 3MF, ... through trimesh; VTU, XDMF through meshio;
-        Rhino ``.3dm``, :func:`load_3dm`; COMPAS assembly ``.json``, :func:`load_compas`).
-
-        ``paths`` is a sequence of files, one block each (labels: file names),
-        or one file holding every block.  In one file the blocks are, in this order of preference:
-
-        - the stored block indices of :func:`~interlock.gallery.export.export` files: the
-          triangle attribute of a binary STL with :data:`HEADER_MARKER` in its header,
-          the face property :data:`BLOCK_DATA` of a PLY file with an
-          ``interlock blocks=N`` comment, the cell data :data:`BLOCK_DATA` of VTU and XDMF;
-        - its objects: OBJ ``o`` statements, GLB/3MF scene nodes (node transforms
-          applied), in file order for OBJ and by name (digits as numbers) otherwise;
-        - for an OBJ file without objects: the sets of faces that share vertex indices, or
-          else the runs of ``v`` lines each followed by its faces, if each is a closed surface
-          (a selection of blocks exported from Rhino);
-        - else its connected bodies.
-
-        A file written by :func:`~interlock.gallery.export.export` announces its blocks
-        (``interlock blocks=N``); one with fewer is cut short, an error.  Bodies
-        that touch cannot be told apart in a single plain STL or PLY file; that
-        is an error asking for one file per block or an OBJ with objects.
-        Polygonal faces are triangulated inside their outline
-        (:func:`~interlock.blocks.repair.triangulate_polygons`), and T-junctions
-        are split (:func:`~interlock.blocks.repair.split_t_junctions`).
-
-        Parameters
-        ----------
-        paths : str, Path or sequence of them
-        frame : iterable of int, optional
-            Indices of the fixed blocks.  Default: the frame the file stores
-            (:mod:`interlock.blocks.meshfiles`: STL attribute bits, PLY/VTU/XDMF
-            ``fixed`` data, OBJ/GLB/3MF names ending in ``fixed``); for a list
-            of files, the blocks whose file marks them fixed; else none.
-        progress : callable, optional
-            Called as ``progress(done, total)`` per block while a Rhino ``.3dm`` or
-            COMPAS ``.json`` file is read (the slow formats; a progress bar).
-
-        Returns
-        -------
-        Assembly
-            ``info["source"]`` lists the files; ``info["frame_from"]`` says where
-            the frame came from: ``"argument"``, ``"file"`` or ``"none"`` (for
-            COMPAS JSON also ``"upstream examples"``).  Labels are those the file
-            stores (``.3dm``, COMPAS JSON and the OBJ, GLB and 3MF files of
-            :func:`~interlock.gallery.export.export`, with their ``info``), else
-            ``"<file name>:<object name>"`` (for a list of files, the file names).
-
-        Raises
-        ------
-        AssemblyError
-            For a missing, unreadable or cut-short file, a block that is not a
-            closed surface, touching bodies in one plain STL or PLY file, or a
-            frame index out of range.
-
-        Examples
-        --------
-        >>> import tempfile
-        >>> cubes = [trimesh.creation.box(bounds=[[x, 0, 0], [x + 1, 1, 1]]) for x in range(3)]
-        >>> with tempfile.TemporaryDirectory() as folder:
-        ...     path = Path(folder) / "row.obj"
-        ...     _ = path.write_text(trimesh.exchange.obj.export_obj(trimesh.util.concatenate(cubes)))
-        ...     row, fixed = Assembly.load(path), Assembly.load(path, frame=[0, 2])
-        >>> len(row), row.frame, row.info["frame_from"], fixed.frame, fixed.info["frame_from"]
-        (3, (), 'none', (0, 2), 'argument')
-        """
-        paths = _paths(paths)
-        if isinstance(paths, (str, Path)) and Path(paths).suffix.lower() == ".3dm":
-            return load_3dm(paths, frame, progress=progress)
-        if isinstance(paths, (str, Path)) and Path(paths).suffix.lower() == ".json":  # COMPAS; frame: node keys
-            assembly = load_compas(paths, supports=None if frame is None else list(frame), progress=progress)
-            assembly.info["frame_from"] = assembly.info["supports_from"]
-            return assembly
-        if isinstance(paths, (str, Path)):
-            path = Path(paths)
-            found = read_mesh_file(path)
-            labels = [found.labels.get(name, f"{path.name}:{name}") for name in found.names]
-            stored, sources, kept = found.frame, [str(path)], restored(found.info or {})
-            meshes = found.meshes
-        else:
-            paths = [Path(p) for p in paths]
-            if not paths:
-                raise AssemblyError("no mesh files given; pass one path or a list of paths")
-            files = [read_mesh_file(p, split=False) for p in paths]
-            meshes = [trimesh.util.concatenate(list(f.meshes)) if len(f.meshes) > 1 else f.meshes[0] for f in files]
-            labels, sources, kept = [p.name for p in paths], [str(p) for p in paths], {}
-            marked = [f.frame is not None for f in files]
-            stored = tuple(k for k, f in enumerate(files) if f.frame) if any(marked) else None
-        frame_from = "argument" if frame is not None else "none" if stored is None else "file"
-        chosen = frame if frame is not None else stored or ()
-        return cls.from_meshes(meshes, frame=chosen, labels=labels,
-                               info={**kept, "source": sources, "frame_from": frame_from})
+        """Deprecated alias of :func:`interlock.read` (``interlock.formats.read``), removed in interlock 0.3."""
+        return _moved("Assembly.load", "read")(paths, frame, progress=progress)
 
     def with_frame(self, frame) -> Assembly:
         """The same blocks with another frame."""
         return Assembly(self.meshes, self.types, self.transforms, self.labels, frame, self.lattice,
                         self._boundary, self.info)
+
+    @property
+    def unit(self) -> str | None:
+        """The length unit of the coordinates (``"mm"``, ``"m"``, ``"in"``, ...), None for a model without one.
+
+        Kept in ``info["unit"]``, so every assembly made from this one keeps it; files state it
+        (:mod:`interlock.formats.units`, ``docs/formats.md``).
+        """
+        unit = self.info.get("unit")
+        return unit if isinstance(unit, str) else None
 
     # --- per-block data ----------------------------------------------------------
     def __len__(self) -> int:
@@ -383,134 +301,30 @@ class Assembly:
 
 
 def load_compas(path, supports=None, progress=None) -> Assembly:
-    """An assembly from a COMPAS assembly JSON file, without COMPAS.
-
-    The file is ``{"dtype": "compas_assembly.datastructures/Assembly" (or
-    ``compas_cra...CRA_Assembly``), "data": {"graph": {"data": {"node": ...}}}}``;
-    each node holds a ``block`` (a COMPAS mesh: ``vertex`` key -> ``{x, y, z}``,
-    ``face`` key -> vertex keys) and optionally ``is_support``.  Polygonal faces
-    are triangulated (ear clipping in their plane, so non-convex faces work)
-    and every block must be closed.  Interfaces stored in the file are
-    ignored: :func:`interlock.verify.contacts` recomputes them.
-
-    Parameters
-    ----------
-    path : str or Path
-    supports : iterable of int, optional
-        Node keys of the fixed blocks (the frame).  Default: the nodes marked
-        ``is_support``; when none is and the file is one of the upstream examples (its node count and
-        :func:`~interlock.blocks.compas.fingerprint`, whatever its name),
-        :data:`~interlock.blocks.compas.UPSTREAM_SUPPORTS`, else no frame.
-
-    Returns
-    -------
-    Assembly
-        One block per node in increasing key order; ``labels`` are the node
-        keys (int), or a node's ``label`` text where it has one (then
-        ``info["node_keys"]`` lists the keys); ``frame`` the supports; ``info``
-        the source, dtype, whether the supports came from the file, the
-        argument or the table, and ``upstream_example`` when it is one.
-
-    Raises
-    ------
-    AssemblyError
-        If the file is missing or not COMPAS assembly JSON, a block is not a
-        closed mesh, or a support key is not a node.
-
-    Examples
-    --------
-    >>> import json, pathlib, tempfile, trimesh
-    >>> from interlock.blocks.compas import COMPAS_DTYPES
-    >>> def node(mesh, support):
-    ...     vertex = {str(k): dict(zip("xyz", p)) for k, p in enumerate(mesh.vertices.tolist())}
-    ...     return {"block": {"data": {"vertex": vertex, "face": dict(enumerate(mesh.faces.tolist()))}},
-    ...             "is_support": support}
-    >>> cubes = [trimesh.creation.box(bounds=[[0, 0, z], [1, 1, z + 1]]) for z in (0, 1)]
-    >>> graph = {"node": {str(k): node(m, k == 0) for k, m in enumerate(cubes)}}
-    >>> path = pathlib.Path(tempfile.mkdtemp()) / "stack.json"
-    >>> _ = path.write_text(json.dumps({"dtype": COMPAS_DTYPES[0], "data": {"graph": {"data": graph}}}))
-    >>> a = load_compas(path)
-    >>> len(a), a.labels, a.frame, round(float(a.volumes.sum()), 9)
-    (2, (0, 1), (0,), 2.0)
-    """
-    meshes, labels, frame, info = read_compas(path, supports, progress=progress)
-    return Assembly.from_meshes(meshes, frame=frame, labels=labels, info=info)
+    """Deprecated alias of :func:`interlock.formats.compas.load_compas` (or :func:`interlock.read`), removed in
+    interlock 0.3."""
+    return _moved("interlock.blocks.load_compas", "compas.load_compas")(path, supports, progress=progress)
 
 
-def load_3dm(path, frame=None, *, frame_layer: str = FRAME_LAYER, progress=None) -> Assembly:
-    """An assembly from a Rhino ``.3dm`` file: every closed mesh or closed polysurface is a block.
-
-    A file of :func:`~interlock.blocks.rhino.write_3dm` (or of ``export(..., "x.3dm")``)
-    comes back exactly: the blocks in their order with bit-identical vertices,
-    their labels (group elements, lozenges, ...), the frame and ``info``.  A file drawn by a person gives one block per
-    object, in file order, labelled by the object's name (else its id); the
-    objects on the layer ``frame_layer`` (or a sublayer of it; any case) are
-    the frame.
-
-    Objects may be meshes (vertices welded where they coincide), or
-    polysurfaces and extrusions: those Rhino saved with render meshes are read
-    through them; others with planar faces and straight edges (boxes, prisms,
-    anything faceted) are cut into polygons here.  rhino3dm cannot mesh curved
-    surfaces outside Rhino, so a curved polysurface saved without render
-    meshes is an error saying so.
-
-    Parameters
-    ----------
-    path : str or path-like
-    frame : iterable of int, optional
-        Indices of the fixed blocks, instead of the frame layer.
-    frame_layer : str
-        The name of the layer of fixed blocks.
-
-    Returns
-    -------
-    Assembly
-        ``info`` holds the written ``info`` (for files of :func:`write_3dm`),
-        ``source``, ``format`` (``"3dm"``) and ``frame_from`` (``"argument"``,
-        ``"file"`` or ``"none"``).
-
-    Raises
-    ------
-    ~interlock.blocks.rhino.RhinoError
-        (one line) if rhino3dm is missing, the file is missing, empty or not a
-        ``.3dm`` file, holds no objects, or an object is not a closed solid (an
-        open mesh, a curve, a point, text, ...; the message names the object).
-
-    Examples
-    --------
-    Two boxes drawn as a person would, the lower one on the ``frame`` layer:
-
-    >>> import rhino3dm, tempfile
-    >>> model = rhino3dm.File3dm()
-    >>> def box(z, layer_name):
-    ...     layer, attributes = rhino3dm.Layer(), rhino3dm.ObjectAttributes()
-    ...     layer.Name = layer_name
-    ...     attributes.LayerIndex = model.Layers.Add(layer)
-    ...     corners = rhino3dm.BoundingBox(0, 0, z, 1, 1, z + 1)
-    ...     return model.Objects.AddBrep(rhino3dm.Brep.CreateFromBox(rhino3dm.Box(corners)), attributes)
-    >>> _, _ = box(0, "frame"), box(1, "blocks")
-    >>> with tempfile.TemporaryDirectory() as folder:
-    ...     _ = model.Write(str(Path(folder) / "stack.3dm"), 7)
-    ...     stack = load_3dm(Path(folder) / "stack.3dm")
-    >>> len(stack), stack.frame, stack.volumes.tolist(), stack.info["frame_from"]
-    (2, (0,), [1.0, 1.0], 'file')
-    """
-    meshes, labels, stored, info = read_3dm_blocks(path, frame_layer=frame_layer, progress=progress)
-    frame_from = "argument" if frame is not None else "none" if stored is None else "file"
-    info["frame_from"] = frame_from
-    return Assembly.from_meshes(meshes, frame=frame if frame is not None else stored or (), labels=labels, info=info)
+def load_3dm(path, frame=None, *, frame_layer: str = "frame", progress=None) -> Assembly:
+    """Deprecated alias of :func:`interlock.formats.rhino.read_3dm` (or :func:`interlock.read`), removed in
+    interlock 0.3."""
+    return _moved("interlock.blocks.load_3dm", "rhino.read_3dm")(path, frame, frame_layer=frame_layer,
+                                                                  progress=progress)
 
 
-def _paths(paths):
-    """One path (str or Path), or a list of them; an :class:`AssemblyError` for anything else (None, 42, ...)."""
-    if isinstance(paths, (str, os.PathLike)):
-        return Path(paths)
-    if isinstance(paths, Sequence) and not isinstance(paths, bytes) and all(
-            isinstance(p, (str, os.PathLike)) for p in paths):
-        return list(paths)
-    got = type(paths).__name__ if not isinstance(paths, Sequence) else f"a {type(paths).__name__} holding " + \
-        ", ".join(sorted({type(p).__name__ for p in paths if not isinstance(p, (str, os.PathLike))}))
-    raise AssemblyError(f"Assembly.load needs a file path (str or Path) or a list of them, got {got}")
+def _moved(old: str, new: str):
+    """The function ``interlock.formats.<new>`` that the deprecated ``old`` forwards to, after a
+    ``DeprecationWarning`` pointing at the caller.  Files are read in :mod:`interlock.formats`, a layer above
+    this one, so it is found by name on first use, as :func:`interlock.deprecation.moved` finds old paths.
+    Callers inside interlock not yet moved to ``interlock.read`` are not warned (their users could do nothing
+    about it)."""
+    caller = sys._getframe(2).f_globals.get("__name__", "")
+    if not caller.startswith("interlock."):
+        warnings.warn(f"{old} moved to interlock.formats.{new}; the old path is removed in interlock "
+                      f"{deprecation.REMOVED_IN}", DeprecationWarning, stacklevel=3)
+    module, _, name = f"interlock.formats.{new}".rpartition(".")
+    return getattr(importlib.import_module(module), name)
 
 
 def _mesh_name(k: int, labels, one_mesh_per_block: bool) -> str:
