@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import glob
 import hashlib
-import html
 import json
 import math
 import os
@@ -29,6 +28,8 @@ from interlock.gallery.render import render
 from interlock.verify import check, contacts, criterion_4_3, periodic_check
 from interlock.verify.check import beyond_first_order
 from interlock.gallery.motion import export_motion
+from interlock.gallery.page import finite_word, write_index
+from interlock.gallery.view.scene import scene
 
 __all__ = ["Claim", "Entry", "EntryResult", "Gallery", "entries", "build", "finite_word", "ESCHER_GROUPS",
            "REFLECTION_GROUPS", "MOTION_FRAMES", "MANIFEST"]
@@ -76,12 +77,14 @@ class Entry:
 
 @dataclass(frozen=True)
 class EntryResult:
-    """A built entry: its JSON record, the files written (relative to the gallery folder) and any contradictions."""
+    """A built entry: its JSON record, the files written (relative to the gallery folder), any contradictions, and
+    the scene of its 3D view."""
 
     name: str
     record: dict
     files: dict
     contradictions: tuple[str, ...] = ()
+    scene: dict | None = field(default=None, repr=False, compare=False)  # the 3D view's (interlock.gallery.view)
 
 
 @dataclass(frozen=True)
@@ -128,7 +131,10 @@ def build(folder, quick: bool = False, seed: int = 0, names=None, progress=None)
     (where there is a cell), Criterion 4.3 (Escher blocks), the paper's claims
     with whether the verdicts agree, and timings.  :data:`MANIFEST` names
     interlock's version, the seed, the entries and the SHA-256 of every file;
-    ``index.html`` is written from the records last.
+    ``index.html`` is written from the records last: a table of contents, the
+    legend, and per entry its verdict in one plain sentence, an interactive 3D
+    view (:mod:`interlock.gallery.view`, loaded as it scrolls into sight), the
+    pictures (click to enlarge) and the files.
 
     The gallery is built in a new folder beside ``folder`` and put in its
     place only when complete (:func:`interlock.files.replace_folder`), so a
@@ -180,6 +186,7 @@ def build(folder, quick: bool = False, seed: int = 0, names=None, progress=None)
     for stale in folder.parent.glob(f".{glob.escape(folder.name)}.*{PARTIAL}"):  # left by a run that was stopped
         shutil.rmtree(stale, ignore_errors=True)
     building = Path(tempfile.mkdtemp(prefix=f".{folder.name}.", suffix=PARTIAL, dir=folder.parent))
+    os.chmod(building, 0o777 & ~_umask())  # a new folder as any other, not mkdtemp's 0700
     try:
         results = []
         for entry in chosen:
@@ -187,7 +194,7 @@ def build(folder, quick: bool = False, seed: int = 0, names=None, progress=None)
             if progress is not None:
                 progress(entry.name)
         _write_manifest(building, results, quick, seed)
-        _write_index(building, results, quick, seed)
+        write_index(building, results, quick, seed)
         replace_folder(building, folder)
     except BaseException:
         shutil.rmtree(building, ignore_errors=True)
@@ -459,6 +466,13 @@ def _build_entry(entry: Entry, folder: Path, seed: int) -> EntryResult:
         written.update({f"motion {k}.png": _relative(path, folder) for k, path in enumerate(frames)})
     timings["render"] = time.perf_counter() - clock
 
+    clock = time.perf_counter()
+    ring = {"outer ring": "the outer ring", "ring of cell translates": "the ring of cell translates"}
+    view = scene(assembly, beyond if beyond is not None else first, title=entry.title, contacts=found,
+                 frame_words=ring.get(made["parameters"].get("frame")))
+    record["sentence"] = view["sentence"]
+    timings["view"] = time.perf_counter() - clock
+
     claims, contradictions = [], []
     for claim in entry.claims:
         holds = claim.test(record)
@@ -470,7 +484,7 @@ def _build_entry(entry: Entry, folder: Path, seed: int) -> EntryResult:
     record["files"] = dict(written)
     record_path = write_atomically(directory / "record.json", json.dumps(record, indent=1, default=_json_default))
     written["record.json"] = _relative(record_path, folder)
-    return EntryResult(entry.name, record, written, tuple(contradictions))
+    return EntryResult(entry.name, record, written, tuple(contradictions), view)
 
 
 def _relative(path, folder: Path) -> str:
@@ -485,70 +499,8 @@ def _json_default(value):
     return str(value)
 
 
-# --- the index page -------------------------------------------------------------------------------
-
-_STYLE = """
-body { font-family: system-ui, sans-serif; margin: 2em; color: #222; background: #fafafa; }
-h1 { margin-bottom: 0.2em; } .lead { color: #555; margin-top: 0; }
-.entry { background: white; border: 1px solid #ddd; border-radius: 8px; padding: 1em; margin: 1.2em 0; }
-.pictures { display: flex; flex-wrap: wrap; gap: 0.5em; } .pictures img { width: 220px; border: 1px solid #eee; }
-.yes { color: #0a7a3a; font-weight: 600; } .no { color: #b3261e; font-weight: 600; } .maybe { color: #a15c00; }
-table { border-collapse: collapse; } td, th { padding: 0.15em 0.7em 0.15em 0; text-align: left; vertical-align: top; }
-.files a { margin-right: 0.8em; } code { background: #f1f1f1; padding: 0 0.2em; }
-"""
-
-
-def _write_index(folder: Path, results, quick: bool, seed: int) -> Path:
-    parts = [f"<!doctype html><html lang='en'><head><meta charset='utf-8'><title>interlock gallery</title>"
-             f"<style>{_STYLE}</style></head><body>",
-             "<h1>interlock gallery</h1>",
-             f"<p class='lead'>{len(results)} entries{' (quick)' if quick else ''}, seed {seed}. "
-             "Every verdict was computed when this page was built; the claims are what the paper proves.</p>"]
-    for result in results:
-        parts.append(_entry_html(result))
-    parts.append("</body></html>")
-    return write_atomically(folder / "index.html", "\n".join(parts))
-
-
-def finite_word(record: dict) -> str:
-    """The finite verdict in words: first order, or beyond it when first order did not prove it interlocked."""
-    if record["finite"]["interlocked"] is True:
-        return "interlocked"
-    beyond = record.get("beyond") or {}
-    return {True: "interlocked (2nd order)", False: "not interlocked", None: "inconclusive"}[beyond.get("interlocked")]
-
-
-def _verdict_word(value) -> str:
-    if value in (True, "interlocked"):
-        return "<span class='yes'>interlocked</span>"
-    if value in (False, "not interlocked"):
-        return "<span class='no'>not interlocked</span>"
-    return "<span class='maybe'>inconclusive</span>"
-
-
-def _entry_html(result: EntryResult) -> str:
-    r, e = result.record, html.escape
-    first = _verdict_word(r["finite"]["interlocked"]).replace(">not interlocked<", ">not infinitesimally interlocked<")
-    rows = [f"<tr><th>finite ({r['blocks']} blocks, {len(r['frame'])} fixed)</th><td>"
-            f"{first} — {e(r['finite']['status'])}</td></tr>"]
-    if r.get("beyond"):
-        word = _verdict_word(r["beyond"]["interlocked"]).replace(">interlocked<", ">interlocked (second order)<")
-        rows.append(f"<tr><th>beyond first order</th><td>{word} — {e(r['beyond']['status'])}</td></tr>")
-    for key, label in (("periodic", "infinite (periodic)"), ("periodic_translational", "infinite, translations")):
-        if r.get(key):
-            rows.append(f"<tr><th>{label}</th><td>{_verdict_word(r[key]['status'])} — {e(r[key]['reason'])}</td></tr>")
-    if r.get("criterion_4_3"):
-        holds = r["criterion_4_3"]["holds"]
-        rows.append(f"<tr><th>Criterion 4.3</th><td>{'holds' if holds else 'fails'}</td></tr>")
-    for claim in r["claims"]:
-        mark = {True: "<span class='yes'>agrees</span>", False: "<span class='no'>CONTRADICTS</span>",
-                None: "<span class='maybe'>cannot tell</span>"}[claim["holds"]]
-        rows.append(f"<tr><th>{e(claim['source'])}</th><td>{e(claim['statement'])}: {mark}</td></tr>")
-    seconds = ", ".join(f"{k.replace('_', ' ')} {v:.2f} s" for k, v in r["timings"].items())
-    pictures = "".join(f"<a href='{e(path)}'><img src='{e(path)}' alt='{e(name)}'></a>"
-                       for name, path in result.files.items() if name.endswith(".png"))
-    links = "".join(f"<a href='{e(path)}' download>{e(name)}</a>" for name, path in result.files.items()
-                    if not name.endswith(".png"))
-    return (f"<div class='entry' id='{e(result.name)}'><h2>{e(r['title'])}</h2>"
-            f"<div class='pictures'>{pictures}</div><table>{''.join(rows)}</table>"
-            f"<p class='files'>Download: {links}</p><p class='lead'>{seconds}</p></div>")
+def _umask() -> int:
+    """The process's umask (read by setting it and putting it back)."""
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask

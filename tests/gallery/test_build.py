@@ -32,6 +32,8 @@ def test_every_linked_file_exists_and_nothing_comes_from_the_network(gallery):
     parser.feed(gallery.index.read_text(encoding="utf-8"))
     assert parser.links
     for link in parser.links:
+        if link.startswith("#") or link == "data:,":  # the table of contents; no favicon request
+            continue
         assert not re.match(r"^[a-z]+://", link), link  # offline: no CDN, no remote picture
         assert (gallery.folder / link).is_file(), link
     names = {e.name for e in entries(quick=True)}

@@ -89,8 +89,6 @@
     var scene = this.scene = new THREE.Scene();
     var camera = this.camera = new THREE.PerspectiveCamera(35, 1, data.size * 1e-3, data.size * 50);
     camera.up.set(0, 0, 1);
-    camera.position.set(data.size * 0.55, -data.size * 0.85, data.size * 0.8);
-    camera.lookAt(0, 0, 0);
     scene.add(new THREE.HemisphereLight(0xffffff, 0x8a8a8a, 2.2));
     var sun = new THREE.DirectionalLight(0xffffff, 1.6);
     sun.position.set(0.4, -0.6, 1.0);
@@ -99,8 +97,9 @@
     var controls = this.controls = new THREE.OrbitControls(camera, renderer.domElement);
     controls.enableDamping = false;
     controls.screenSpacePanning = true;
-    controls.saveState();
     controls.addEventListener('change', function () { self.render(); });
+    controls.addEventListener('start', function () { self.moved = true; });
+    this.moved = false;
 
     this.buildBlocks();
     this.buildForces();
@@ -360,8 +359,7 @@
       return b;
     }
     button('Reset view', 'back to the first view (orbit: drag; zoom: wheel; pan: right-drag)', function () {
-      self.controls.reset();
-      self.render();
+      self.home();
     });
     this.frameButton = button('Hide frame', 'show or hide the fixed blocks', function () {
       self.showFrame(!self.frameShown);
@@ -493,13 +491,25 @@
     this.render();
   };
 
+  View.prototype.home = function () {  // the first view: from the front right, above, the whole assembly in sight
+    var camera = this.camera, radius = this.data.size / 2;
+    var vertical = camera.fov * Math.PI / 180, horizontal = 2 * Math.atan(Math.tan(vertical / 2) * camera.aspect);
+    var distance = 1.08 * radius / Math.sin(Math.min(vertical, horizontal) / 2);
+    var direction = new THREE.Vector3(0.5, -0.8, 0.75).normalize();
+    camera.position.copy(direction.multiplyScalar(distance));
+    this.controls.target.set(0, 0, 0);
+    this.controls.update();
+    this.moved = false;
+    this.render();
+  };
+
   View.prototype.resize = function () {
     if (this.failed || this.disposed) return;
     var width = Math.max(this.stage.clientWidth, 1), height = Math.max(this.stage.clientHeight, 1);
     this.renderer.setSize(width, height);
     this.camera.aspect = width / height;
     this.camera.updateProjectionMatrix();
-    this.render();
+    if (!this.moved) this.home(); else this.render();
   };
 
   View.prototype.render = function () {
