@@ -21,18 +21,18 @@ from interlock.verify.budget import Budget, TimeLimitReached
 from interlock.verify.first_order import (DENSE_COLUMNS, FARKAS_CLOSED_RTOLS, FIRST_KERNEL_PROBE, GRAM_RESOLUTION,
                                          GRAM_SURE_RTOL, INVERSE_ITERATIONS, LP_TOL, MAX_KERNEL_PROBE,
                                          PROJECTION_ROUNDS, RANK_CLEAR_RTOL, SOLVER_THREADS, matrix_rank,
-                                         motion_lp, opening_motion, positive_stress)
+                                         interior_motion, opening_motion, positive_stress)
 from interlock.verify.contacts import (CONTACT_MODELS, PRESS_RTOL, Contact, contacts as find_contacts, model_contacts,
                                       search_distances)
 from interlock.verify.load_paths import load_path_bound
-from interlock.verify.margin import Margin, assess
+from interlock.verify.margin import Margin, assess, row_tolerances
 from interlock.verify.precision import PRECISION_FACTOR, Precision, block_precision
 from interlock.verify.matrix import InterlockingMatrix, interlocking_matrix
 from interlock.verify.validate import refuse_overlaps_without_contact, validate as check_overlaps
 
-__all__ = ["Verdict", "check", "beyond_first_order", "opening_motion", "contact_tolerances", "FARKAS_CLOSED_RTOLS",
+__all__ = ["Verdict", "check", "beyond_first_order", "block_noise", "opening_motion", "contact_tolerances", "FARKAS_CLOSED_RTOLS",
            "PROJECTION_ROUNDS", "STAGES", "RANK_RTOL", "RANK_CLEAR_RTOL", "GRAM_RESOLUTION", "GRAM_SURE_RTOL", "LP_TOL",
-           "LP_SOLVERS", "MOVING_RTOL", "DENSE_COLUMNS", "FIRST_KERNEL_PROBE", "COARSE_RATIO", "SOLVER_THREADS",
+           "LP_SOLVERS", "MOVING_RTOL", "DENSE_COLUMNS", "FIRST_KERNEL_PROBE", "COARSE_RATIO", "NOISE_CONTACTS", "SOLVER_THREADS",
            "MAX_KERNEL_PROBE", "INVERSE_ITERATIONS"]
 
 #: A singular value at most ``RANK_RTOL * sigma_max`` is zero ...
@@ -41,10 +41,14 @@ RANK_RTOL = 1e-9
 #: 4,800-block RhomBlock hexagon where HiGHS' interior-point method took 206 s; HiGHS is the fallback.
 LP_SOLVERS = ("clarabel", "highs")
 #: The stages of :func:`check`, in order, as reported to its ``progress`` callback and in ``timings``.
-STAGES = ("validate", "contacts", "matrix", "rank", "lp", "margin", "certify", "beyond")
+STAGES = ("validate", "contacts", "matrix", "rank", "lp", "margin", "motion", "certify", "beyond")
 #: An input whose tolerance reaches this share of a contact's size (the square root of its area) is too coarse to
 #: decide where the margin does not: the 4-digit bunny's faces are bent by 0.0036 on contacts 0.06 across.
 COARSE_RATIO = 0.01
+
+#: A block's noise is read (:func:`block_noise`) from at least this many contacts: the median of fewer would
+#: take a designed fold of one face for noise.
+NOISE_CONTACTS = 3
 
 
 @dataclass(frozen=True)
@@ -320,7 +324,7 @@ def _decide(assembly, frame, translational, certify, rank_rtol, lp_tol, contacts
         # a clear kernel decides "not interlocked" by itself unless a bent contact or given contacts may undo it
         sliding_decides = (rank_clear and rank < n and not bent.any() and contacts is None
                            and n > DENSE_COLUMNS)
-        stress, lp_value, lp_motion = None, None, None
+        stress, lp_value, lp_motion, interior = None, None, None, None
         if not sliding_decides:
             with _stage(timings, "lp", progress, budget):
                 stress, tolerances["lp_solver"], farkas = positive_stress(A.matrix, lp_tol, lp_solver, budget)
@@ -330,7 +334,8 @@ def _decide(assembly, frame, translational, certify, rank_rtol, lp_tol, contacts
                     lp_value, lp_motion = opening_motion(A.matrix, farkas, lp_tol)
                     tolerances["motion_from"] = "farkas" if lp_motion is not None else "lp"
                     if lp_motion is None:
-                        lp_value, lp_motion = motion_lp(A.matrix, lp_tol, budget)
+                        interior, tolerances["lp_status"] = interior_motion(A.matrix, budget)
+                        lp_value, lp_motion = opening_motion(A.matrix, interior, lp_tol)
 
     no_frame = " (no frame: a finite assembly without fixed blocks can always move as a whole)" if not fixed else ""
     motions = []  # candidate "not interlocked" verdicts: the first one that survives bent contacts is the answer
@@ -347,9 +352,15 @@ def _decide(assembly, frame, translational, certify, rank_rtol, lp_tol, contacts
         motions.append(Verdict(False, f"{moving_names(moving)} a first-order motion that opens contacts "
                                f"(LP value {lp_value:.3g}){no_frame}", rank=rank, lp_value=lp_value,
                                motion=motion, motion_kind="opening", moving=moving, **base))
+    if not motions and stress is None and (lp_value is None or lp_value <= lp_tol):
+        # floating point left no clean motion; one that closes no contact by more than its tolerance still answers
+        within = _within_tolerance(A, found, limits, interior, len(assembly), base, rank, no_frame)
+        if within is not None:
+            motions.append(within)
     if motions:
-        if bent.any():
-            motions = [unless_bent(v, A, found, bent, assembly.centroids) for v in motions]
+        if bent.any():  # a motion within tolerance already allows each contact its bend
+            motions = [v if v.motion_kind == "within tolerance" else unless_bent(v, A, found, bent, assembly.centroids)
+                       for v in motions]
         if contacts is not None:  # the caller's contacts may miss faces that touch: the default search is the judge
             motions = [_unless_missed(v, assembly, precision, tolerance) if v.interlocked is False else v
                        for v in motions]
@@ -371,6 +382,10 @@ def _decide(assembly, frame, translational, certify, rank_rtol, lp_tol, contacts
                                                    per_contact=True, budget=budget), A, len(assembly),
                                    _coarsest(found, A, limits) if tolerance is None else None)
             verdict = _with_play(verdict, A, found, budget)
+    if verdict.motion is not None and verdict.motion_kind == "within tolerance":
+        # a motion the tolerances leave open: moved for real, it either shows the blocks coming apart or collides
+        with _stage(timings, "motion", progress, budget):
+            verdict = _shown_finitely(assembly, verdict)
     if certify:
         from interlock.verify.certify import certify_verdict
 
@@ -381,6 +396,49 @@ def _decide(assembly, frame, translational, certify, rank_rtol, lp_tol, contacts
             verdict = beyond_first_order(assembly, verdict, contacts=found)
     return verdict
 
+
+
+def _within_tolerance(A: InterlockingMatrix, found, limits, x, blocks: int, base: dict, rank: int, no_frame: str):
+    """"Not interlocked within tolerance" from an interior point ``x`` of the motion LP that no cleaning made exact,
+    or None.
+
+    ``x`` opens some contact and closes every row ``r`` by at most its tolerance ``eps_r``
+    (:func:`~interlock.verify.margin.row_tolerances`) per unit of ``|x|_inf``, the test of the margin's motions
+    (:func:`~interlock.verify.margin.tolerant_motion`): a motion of the assembly within the input's tolerance.
+    """
+    if x is None or not A.shape[0]:
+        return None
+    eps = row_tolerances(A, found, np.maximum(limits, np.finfo(float).tiny))
+    y = A.matrix @ x
+    size = float(np.abs(x).max(initial=0.0))
+    if not size > 0 or not float(y.max(initial=0.0)) > 0:
+        return None
+    closing = float(max(0.0, float((-y / eps).max(initial=0.0)))) / size
+    if closing > 1.0:
+        return None
+    motion, moving = _motion(A, x, blocks, reversible=False)
+    return Verdict(False, f"{moving_names(moving)} a first-order motion that opens contacts and closes none by more "
+                          f"than {closing:.2g} of its tolerance (up to {float(limits.max()):.3g}; the LP's interior "
+                          f"point, which floating point could not make exact){no_frame}", rank=rank, lp_value=None,
+                   motion=motion, motion_kind="within tolerance", moving=moving, **base)
+
+
+def _shown_finitely(assembly: Assembly, verdict: Verdict) -> Verdict:
+    """A "not interlocked within tolerance" verdict whose motion, followed for real, moves the blocks apart.
+
+    The motion keeps every contact within the input's tolerance.  Followed as a finite motion
+    (:func:`~interlock.verify.motion.finite_motion`), it may move the blocks apart without overlap beyond
+    :data:`~interlock.verify.motion.OVERLAP_RTOL` of a block's volume: then the answer is the plain "not interlocked
+    (finite motion shown)".  A collision leaves the verdict as it was.  (Not for a slide across a bent face: a
+    fold of 1e-7 blocks a unit block for real, yet overlaps it by less than that share of its volume.)
+    """
+    from interlock.verify.motion import finite_motion
+
+    shown = finite_motion(assembly, verdict.motion, frame=verdict.frame)
+    if not shown.shown:
+        return verdict
+    return dataclasses.replace(verdict, interlocked=False, finite_motion=shown,
+                               status=f"{shown.message}; first order: {verdict.status}")
 
 
 def beyond_first_order(assembly: Assembly, verdict: Verdict, *, contacts=None) -> Verdict:
@@ -483,17 +541,45 @@ def contact_tolerances(found, precision: Precision, tolerance=None, bends: bool 
     contact's own :attr:`~interlock.verify.contacts.Contact.tolerance` (the
     rounding of its two blocks, plus twice the bend of faces bent within the
     tolerances), or, for contacts given by hand, the rounding of its blocks
-    (:meth:`~interlock.verify.precision.Precision.contact_tolerance`).
+    (:meth:`~interlock.verify.precision.Precision.contact_tolerance`); and at
+    least the mean of its two blocks' largest such tolerance (a noisy mesh
+    shows its noise only on faces of several triangles).
     ``bends=False``: the rounding alone (what the numbers show, without the allowance for computed geometry:
     :meth:`~interlock.verify.precision.Precision.contact_tolerance`).
     """
     if tolerance is not None:
         return np.full(len(found), float(tolerance))
     rounding = np.array([precision.contact_tolerance(c.i, c.j) for c in found], dtype=float)
+    if len(found):  # vertex noise of either block moves the contact: the sum of the blocks' noise
+        noise = block_noise(found)
+        rounding = np.maximum(rounding, np.array([noise[c.i] + noise[c.j] for c in found]))
     if not bends:
         return rounding
     own = np.array([np.nan if c.tolerance is None else c.tolerance for c in found], dtype=float)
     return np.where(np.isnan(own), rounding, np.maximum(own, rounding))
+
+
+def block_noise(found) -> np.ndarray:
+    """Per block (indexed up to the largest in ``found``): the median bend of its contacts' faces, a length.
+
+    A noisy mesh bends nearly every face of several triangles by about its noise, and leaves single triangles
+    planar however noisy it is: the median :attr:`~interlock.blocks.contact.Contact.deviation` over a block's
+    contacts reads that noise.  A bend only some faces show (a fold of a designed face) is geometry, not noise,
+    and leaves the median at 0.  Fewer than :data:`NOISE_CONTACTS` contacts read no noise (0).
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace as Found
+    >>> found = [Found(i=0, j=k, deviation=d) for k, d in ((1, 1e-9), (2, 2e-9), (3, 3e-9), (4, 1e-7))]
+    >>> block_noise(found).tolist()  # block 0 reads its noise; the others have one contact each
+    [2.5e-09, 0.0, 0.0, 0.0, 0.0]
+    """
+    blocks = 1 + max(max(c.i, c.j) for c in found)
+    bends = [[] for _ in range(blocks)]
+    for c in found:
+        bends[c.i].append(c.deviation)
+        bends[c.j].append(c.deviation)
+    return np.array([float(np.median(b)) if len(b) >= NOISE_CONTACTS else 0.0 for b in bends])
 
 
 def _tolerance_source(found, A: InterlockingMatrix, precision: Precision) -> str:

@@ -17,7 +17,7 @@ import scipy.sparse.linalg
 
 from interlock.verify.budget import Budget
 
-__all__ = ["matrix_rank", "positive_stress", "opening_motion", "motion_lp", "clarabel_settings", "LP_TOL",
+__all__ = ["matrix_rank", "positive_stress", "opening_motion", "motion_lp", "interior_motion", "clarabel_settings", "LP_TOL",
            "RANK_CLEAR_RTOL", "GRAM_RESOLUTION", "GRAM_SURE_RTOL", "FARKAS_CLOSED_RTOLS", "PROJECTION_ROUNDS",
            "DENSE_COLUMNS", "MAX_KERNEL_PROBE", "SOLVER_THREADS", "FIRST_KERNEL_PROBE", "INVERSE_ITERATIONS"]
 
@@ -240,20 +240,18 @@ def _least_squares(A: sp.csr_matrix, b: np.ndarray) -> np.ndarray:
     return scipy.sparse.linalg.splu((gram + mu * sp.identity(A.shape[1], format="csc")).tocsc()).solve(A.T @ b)
 
 
-def motion_lp(A: sp.csr_matrix, tol: float, budget: Budget | None = None):
-    """``max 1^T s`` with ``A x = s``, ``0 <= s <= 1``, by Clarabel's interior-point method: (value, x).
+def interior_motion(A: sp.csr_matrix, budget: Budget | None = None):
+    """``(x, status)``: Clarabel's interior point of ``max 1^T s`` with ``A x = s``, ``0 <= s <= 1``.
 
-    The fallback when the Farkas vector cannot be cleaned; the interior point
-    is cleaned the same way (:func:`opening_motion`).  ``(None, None)`` when
-    it fails or yields no clean motion (its status in the verdict), never a
-    simplex run over ``[A; -A]``, which took over 15 minutes on a 559-block
-    peer matrix.
+    ``x`` is None unless Clarabel reports "Solved" or "AlmostSolved" (its status says why).  The point is not
+    cleaned: rows the exact optimum keeps shut come out slightly negative (:func:`opening_motion` cleans them).
+    Never a simplex run over ``[A; -A]``, which took over 15 minutes on a 559-block peer matrix.
     """
     import clarabel
 
     m, n = A.shape
     if m == 0:
-        return 0.0, np.zeros(n)
+        return np.zeros(n), "no rows"
     # variables (x, s): minimise -1^T s subject to A x - s = 0, -s <= 0, s <= 1
     eye = sp.identity(m, format="csc")
     constraints = sp.vstack([sp.hstack([A, -eye]), sp.hstack([sp.csc_matrix((m, n)), -eye]),
@@ -267,5 +265,17 @@ def motion_lp(A: sp.csr_matrix, tol: float, budget: Budget | None = None):
     if status == "MaxTime" and budget is not None:
         budget.check("lp")
     if status not in ("Solved", "AlmostSolved"):
-        return None, None
-    return opening_motion(A, np.asarray(solution.x)[:n], tol)
+        return None, status
+    return np.asarray(solution.x)[:n], status
+
+
+def motion_lp(A: sp.csr_matrix, tol: float, budget: Budget | None = None):
+    """``(value, x)``: the motion LP's interior point (:func:`interior_motion`) cleaned by :func:`opening_motion`.
+
+    The fallback when the Farkas vector cannot be cleaned.  ``(None, None)`` when the solver fails or yields no
+    clean motion; with no rows, ``(0.0, 0)``.
+    """
+    if A.shape[0] == 0:
+        return 0.0, np.zeros(A.shape[1])
+    x, _ = interior_motion(A, budget)
+    return opening_motion(A, x, tol)
