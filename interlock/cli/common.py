@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import argparse
 import math
 import time
 
@@ -19,20 +20,72 @@ MESH_FORMATS = ("OBJ, STL, PLY, GLB/GLTF, 3MF, OFF, VTU, XDMF, Rhino 3DM, COMPAS
 #: The suffixes ``generate -o`` and ``convert`` write (interlock.gallery.export.FORMATS).
 OUTPUT_SUFFIXES = (".stl", ".obj", ".ply", ".glb", ".3mf", ".vtu", ".xdmf", ".3dm", ".json")
 
+#: The largest ``--exploded`` factor: blocks move by the factor times their distance from the centre, so a
+#: factor of 1,000 already spreads them a thousand times wider than they are; beyond, positions overflow.
+LARGEST_EXPLODED = 1000.0
+#: The largest coordinate ``--deform`` takes (model units): cell lengths reach 1e30
+#: (``interlock.wallpaper.lattice.LENGTH_RANGE``); products of coordinates must stay far within float64.
+LARGEST_COORDINATE = 1e50
+
 
 def output_arguments(parser) -> None:
     parser.add_argument("-o", "--output", required=True, metavar="FILE",
-                        help=f"output file: {' '.join(OUTPUT_SUFFIXES)}, or .png for a picture")
-    parser.add_argument("--exploded", type=float, default=0.0, help="move blocks apart by this factor (default 0)")
-    parser.add_argument("--max-blocks", type=int, default=None, metavar="N",
+                        help=f"output file: {' '.join(OUTPUT_SUFFIXES)}, or .png for a picture (in a folder that "
+                             "exists)")
+    parser.add_argument("--exploded", type=exploded_factor, default=0.0,
+                        help=f"move blocks apart by this factor, 0..{LARGEST_EXPLODED:g} (default 0)")
+    parser.add_argument("--max-blocks", type=whole_number, default=None, metavar="N",
                         help="refuse to make more than N blocks (default 100,000; counted before anything is made)")
 
 
 def lattice_arguments(parser) -> None:
-    parser.add_argument("--a", type=float, default=1.0, help="cell edge a (default 1)")
-    parser.add_argument("--b", type=float, default=None, help="cell edge b (default: a)")
-    parser.add_argument("--gamma", type=float, default=None,
+    parser.add_argument("--a", type=real_number, default=1.0, help="cell edge a (default 1)")
+    parser.add_argument("--b", type=real_number, default=None, help="cell edge b (default: a)")
+    parser.add_argument("--gamma", type=real_number, default=None,
                         help="cell angle in degrees (default: the crystal system's)")
+
+
+def real_number(text: str) -> float:
+    """An argparse ``type``: a number written in ASCII (``float`` also reads '٢' and '０'); inf and nan pass,
+    for the library to refuse with its own words.
+
+    >>> real_number("1e-3"), real_number("inf")
+    (0.001, inf)
+    """
+    if not text.isascii():
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number: write it with the digits 0-9")
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+
+
+def whole_number(text: str) -> int:
+    """An argparse ``type``: a whole number written with the ASCII digits 0-9 (``int`` also reads '٢', '０').
+
+    >>> whole_number("12"), whole_number("-3")
+    (12, -3)
+    """
+    digits = text.strip()
+    if not (digits.isascii() and digits.lstrip("+-").isdigit()):
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number: write it with the digits 0-9")
+    return int(digits)
+
+
+def exploded_factor(text: str) -> float:
+    """An argparse ``type`` for ``--exploded``: a number 0..:data:`LARGEST_EXPLODED`."""
+    value = real_number(text)
+    if not 0 <= value <= LARGEST_EXPLODED:  # nan too
+        raise argparse.ArgumentTypeError(f"the factor must be a number from 0 to {LARGEST_EXPLODED:g}, got {text}")
+    return value
+
+
+def frames_need_order_2(args) -> None:
+    """Refuse ``--frames`` without ``--order 2``: the frames show the finite motion that only the verdict beyond
+    first order looks for, so without it they would never be written (``verify`` calls this first)."""
+    if getattr(args, "frames", None) is not None and getattr(args, "order", 1) != 2:
+        raise InterlockError("--frames writes the finite motion that --order 2 looks for; add --order 2 "
+                             f"(or drop --frames {args.frames})")
 
 
 def time_limit(seconds, started: float) -> float | None:
@@ -94,21 +147,65 @@ def write_assembly(assembly, args) -> int:
 
 
 def edge_points(text: str):
-    """'0:0.25,0.1;0.4,0.2' -> (0, [(0.25, 0.1), (0.4, 0.2)])."""
+    """'0:0.25,0.1;0.4,0.2' -> (0, [(0.25, 0.1), (0.4, 0.2)]): an edge (ASCII digits) and at least one point of
+    finite coordinates up to :data:`LARGEST_COORDINATE`.
+
+    >>> edge_points("0:0.25,0.1;0.4,0.2")
+    (0, [[0.25, 0.1], [0.4, 0.2]])
+    >>> edge_points("0:")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    interlock.errors.InterlockError: cannot read --deform '0:': it gives edge 0 no point; use EDGE:X,Y[;X,Y...], ...
+    """
     edge, colon, rest = text.partition(":")
-    if not colon or not edge.strip().isdigit():
-        raise InterlockError(f"cannot read --deform {text!r}: use EDGE:X,Y[;X,Y...], e.g. 0:0.25,0.1")
-    points = [numbers(point, float, "--deform") for point in rest.split(";") if point.strip()]
+    if not colon or not _ascii_digits(edge.strip()):
+        raise InterlockError(f"cannot read --deform {text!r}: use EDGE:X,Y[;X,Y...], e.g. 0:0.25,0.1 "
+                             "(EDGE written with the digits 0-9)")
+    points = [numbers(point, float, "--deform", largest=LARGEST_COORDINATE) for point in rest.split(";")
+              if point.strip()]
+    if not points:
+        raise InterlockError(f"cannot read --deform {text!r}: it gives edge {int(edge)} no point; use "
+                             "EDGE:X,Y[;X,Y...], e.g. 0:0.25,0.1 (leave out --deform to keep an edge straight)")
     if any(len(p) != 2 for p in points):
         raise InterlockError(f"cannot read --deform {text!r}: every point needs two coordinates X,Y")
     return int(edge), points
 
 
-def numbers(text: str, kind, flag: str) -> list:
+def numbers(text: str, kind, flag: str, largest: float | None = None) -> list:
+    """Comma-separated numbers of ``kind`` (int or float) written in ASCII; with ``largest``, each finite and of
+    magnitude at most ``largest``.
+
+    >>> numbers("1,2.5", float, "--tilt-axis"), numbers("3,0,1", int, "--staircase")
+    ([1.0, 2.5], [3, 0, 1])
+    """
+    if not text.isascii():  # int() and float() read other scripts' digits ('٢', '０', ...), which no one means
+        raise InterlockError(f"cannot read {flag} {text!r}: write the numbers with the digits 0-9")
     try:
-        return [kind(part) for part in text.split(",")]
+        values = [kind(part) for part in text.split(",")]
     except ValueError:
         raise InterlockError(f"cannot read {flag} {text!r}: expected comma-separated numbers") from None
+    if largest is not None:
+        bad = [v for v in values if not abs(v) <= largest]  # nan, inf and the huge
+        if bad:
+            raise InterlockError(f"cannot read {flag} {text!r}: {bad[0]:g} is not a finite number of size at most "
+                                 f"{largest:g}")
+    return values
+
+
+def axis_direction(text: str, flag: str = "--tilt-axis") -> list[float]:
+    """'X,Y,Z' -> the direction of that vector, as three floats of largest magnitude 1 (so that no length of a
+    huge vector overflows); a vector that is not finite, not 3 numbers or zero is refused.
+
+    >>> axis_direction("1e308,1e308,0"), axis_direction("0,-2,0")
+    ([1.0, 1.0, 0.0], [0.0, -1.0, 0.0])
+    """
+    values = numbers(text, float, flag)
+    if len(values) != 3 or not all(math.isfinite(v) for v in values) or not any(values):
+        raise InterlockError(f"cannot read {flag} {text!r}: give x, y, xy30 or a finite, non-zero vector X,Y,Z")
+    largest = max(abs(v) for v in values)
+    return [v / largest for v in values]
+
+
 
 
 def load(paths, fixed, progress=None):
@@ -141,8 +238,9 @@ def indices(text: str) -> list[int]:
     out = []
     for part in filter(None, (p.strip() for p in text.split(","))):
         low, dash, high = (s.strip() for s in part.partition("-"))
-        if not low.isdigit() or (dash and not high.isdigit()):
-            raise InterlockError(f"cannot read block list {text!r}: use indices and ranges such as 0,1 or 0-3,7")
+        if not _ascii_digits(low) or (dash and not _ascii_digits(high)):
+            raise InterlockError(f"cannot read block list {text!r}: use indices and ranges such as 0,1 or 0-3,7 "
+                                 "(digits 0-9)")
         if max(int(low), int(high) if dash else 0) > LARGEST_INDEX:
             raise InterlockError(f"cannot read block list {text!r}: {part} reaches beyond block {LARGEST_INDEX:,}; "
                                  f"give indices of the file's blocks")
@@ -154,3 +252,8 @@ def indices(text: str) -> list[int]:
         raise InterlockError(f"cannot read block list {text!r}: it names no block; use indices and ranges such as "
                              "0,1 or 0-3,7")
     return out
+
+
+def _ascii_digits(text: str) -> bool:
+    """Only the digits 0-9 (``str.isdigit`` is also true of '²', '٢' and '０', which ``int`` refuses or misreads)."""
+    return text.isascii() and text.isdigit()

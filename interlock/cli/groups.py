@@ -9,12 +9,21 @@ from interlock.cli.common import lattice_arguments
 
 
 def add_parser(commands) -> None:
-    groups = commands.add_parser("groups", help="list the 17 wallpaper groups")
+    groups = commands.add_parser(
+        "groups", help="list the 17 wallpaper groups",
+        description="List the 17 plane crystallographic (wallpaper) groups: crystal system, |G/T| (blocks per "
+                    "cell), the edges of the fundamental domain and how many pairs of them can be deformed "
+                    "(the Escher trick; mirror edges cannot). interlock group NAME shows one in full.",
+    )
     groups.add_argument("--json", action="store_true", help="print JSON instead of a table")
     groups.set_defaults(run=run_groups)
 
     one = commands.add_parser(
-        "group", help="show one wallpaper group: lattice, fundamental domain and side pairings"
+        "group", help="show one wallpaper group: lattice, fundamental domain and side pairings",
+        description="Show one wallpaper group on a lattice: the lattice vectors, the coset representatives, the "
+                    "fundamental domain F (vertices v0, v1, ...; edge i runs from v_i to v_i+1) and the side "
+                    "pairings: edge i <- edge j means the element maps edge j onto edge i, so a point given to "
+                    "edge j by --deform appears on edge i too.",
     )
     one.add_argument("name", help="short symbol, e.g. p6 or p4g")
     lattice_arguments(one)

@@ -6,33 +6,43 @@ import argparse
 import json
 import time
 
-from interlock.cli.common import MESH_FORMATS, load, numbers, time_limit
+from interlock.cli.common import MESH_FORMATS, axis_direction, load, real_number, time_limit
 from interlock.errors import InterlockError
+
+#: The largest ``--density``: weights are densities times volumes, and forces sums of weights, so far beyond
+#: (1e300) they overflow float64; the verdict does not depend on a density shared by every block.
+LARGEST_DENSITY = 1e30
 
 
 def add_parser(commands) -> None:
     stability = commands.add_parser(
-        "stability", help="does an assembly stand under its own weight with friction (RBE / CRA, seed 001)?",
+        "stability", help="does an assembly stand under its own weight with friction (RBE or CRA)?",
         description="Rigid-block equilibrium (RBE): compression-only forces at the contact vertices, linearised "
                     "friction cones, self-weight; coupled rigid-block analysis (CRA) also asks for a virtual "
-                    "motion that realises them. COMPAS assembly JSON takes its supports as the frame.",
+                    "motion that realises them. COMPAS assembly JSON takes its supports as the frame; mesh files "
+                    "name theirs with --fixed (unless interlock wrote the frame into them), and --density sets "
+                    "the weight of every block.",
         epilog="examples:\n  interlock stability type-a.json --mu 0.84\n"
+               "  interlock stability part_*.obj --fixed 0,1 --density 2400 --mu 0.6\n"
                "  interlock stability H.json --mu 0.84 --method cra\n"
                "  interlock stability type-c.json --mu 0.2 --tilt-axis xy30 --json",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     stability.add_argument("paths", nargs="+",
                            help=f"a COMPAS JSON file, or mesh files (one per block): {MESH_FORMATS}")
-    stability.add_argument("--mu", type=float, required=True, help="friction coefficient")
+    stability.add_argument("--mu", type=real_number, required=True, help="friction coefficient")
     stability.add_argument("--method", default="rbe", choices=("rbe", "cra"),
                            help="rbe: equilibrium only (default); cra: equilibrium realised by a virtual motion "
                                 "(exact MILP, slower)")
-    stability.add_argument("--fixed", default=None, metavar="LIST", help="frame for mesh files, e.g. 0,1")
-    stability.add_argument("--density", type=float, default=1.0, help="density of every block (default 1)")
+    stability.add_argument("--fixed", default=None, metavar="LIST",
+                           help="the supports (frame) of mesh files: block indices, e.g. 0,1 or 0-3,7 (a COMPAS "
+                                "file marks its own)")
+    stability.add_argument("--density", type=_density, default=1.0,
+                           help=f"density of every block, at most {LARGEST_DENSITY:g} (default 1)")
     stability.add_argument("--cone", default="paper", choices=("paper", "inner"),
                            help="paper: the circumscribed octagon; inner: an inscribed one (conservative)")
     stability.add_argument("--tilt-axis", metavar="AXIS", help="also find the critical tilt about x, y, xy30 or X,Y,Z")
-    stability.add_argument("--time-limit", type=float, default=None, metavar="SECONDS",
+    stability.add_argument("--time-limit", type=real_number, default=None, metavar="SECONDS",
                            help="seconds for the whole command (reading the files, rbe or cra, the tilt scan); past "
                                 "it the answer is 'inconclusive: time limit reached in <stage>' (default: no limit; "
                                 "the route cra takes never depends on the clock)")
@@ -48,6 +58,14 @@ def add_parser(commands) -> None:
                                 "compas_cra write them) instead of finding contacts")
     stability.add_argument("--json", action="store_true", help="print JSON instead of text")
     stability.set_defaults(run=run)
+
+
+def _density(text: str) -> float:
+    value = real_number(text)
+    if value > LARGEST_DENSITY:  # 0, negative, nan and inf: the library's words
+        raise argparse.ArgumentTypeError(f"the density must be at most {LARGEST_DENSITY:g} (the blocks' weights "
+                                         f"would overflow), got {text}")
+    return value
 
 
 def run(args) -> int:
@@ -88,8 +106,7 @@ def run(args) -> int:
                      time_limit=time_limit(args.time_limit, started))
     tilt = None
     if args.tilt_axis is not None:
-        axis = (args.tilt_axis if args.tilt_axis in ("x", "y", "xy30")
-                else numbers(args.tilt_axis, float, "--tilt-axis"))
+        axis = args.tilt_axis if args.tilt_axis in ("x", "y", "xy30") else axis_direction(args.tilt_axis)
         with tqdm(desc=f"tilt about {args.tilt_axis}", unit="angle", disable=None) as bar:
             def advance(angle, stable):
                 words = {True: "stable", False: "not stable"}.get(stable, "undecided")

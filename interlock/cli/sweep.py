@@ -6,6 +6,8 @@ import argparse
 import sys
 import warnings
 
+from interlock.cli.common import whole_number
+
 
 def add_parser(commands) -> None:
     sweep = commands.add_parser(
@@ -18,12 +20,14 @@ def add_parser(commands) -> None:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     sweep.add_argument("spec", help="the sweep spec (TOML)")
-    sweep.add_argument("-o", "--output", required=True, metavar="RESULTS", help="*.jsonl or *.parquet")
-    sweep.add_argument("--scheduler", metavar="ADDRESS", help="a running Dask scheduler (needs the sweep extra)")
-    sweep.add_argument("--workers", type=int, metavar="N", help="local processes (default: all cores)")
+    sweep.add_argument("-o", "--output", required=True, metavar="RESULTS",
+                       help="*.jsonl or *.parquet, in a folder that exists")
+    sweep.add_argument("--scheduler", metavar="ADDRESS",
+                       help="a running Dask scheduler, e.g. tcp://10.0.0.5:8786 (needs the sweep extra)")
+    sweep.add_argument("--workers", type=whole_number, metavar="N", help="local processes (default: all cores)")
     sweep.add_argument("--resume", action="store_true",
                        help="keep the records in RESULTS (they must be of this spec), evaluate the rest")
-    sweep.add_argument("--max-points", type=int, default=None, metavar="N",
+    sweep.add_argument("--max-points", type=whole_number, default=None, metavar="N",
                        help="refuse a spec with more points than N (default 1,000,000)")
     sweep.set_defaults(run=run)
 
@@ -44,7 +48,8 @@ def run(args) -> int:
         raise SweepError(f"--max-points must be at least 1, got {limit}")
     total = check_size(spec, limit)
     client = None
-    if args.scheduler:
+    if args.scheduler is not None:
+        _check_address(args.scheduler)
         try:
             from distributed import Client
         except ImportError:
@@ -53,6 +58,9 @@ def run(args) -> int:
             client = Client(args.scheduler, timeout=10)
         except OSError as error:
             raise SweepError(f"no Dask scheduler at {args.scheduler}: {error}") from None
+        except (ValueError, TypeError) as error:  # distributed's words for an address it cannot parse
+            raise SweepError(f"--scheduler {args.scheduler!r} is not a Dask scheduler address ({error}); give "
+                             "one such as tcp://10.0.0.5:8786") from None
     try:
         with tqdm(total=total, desc="sweep", unit="point", disable=None) as bar, \
                 warnings.catch_warnings(record=True) as caught:
@@ -91,3 +99,13 @@ def run(args) -> int:
               file=sys.stderr)
         return 1
     return 0
+
+
+def _check_address(address: str) -> None:
+    """Refuse what is plainly no scheduler address before Dask tries it (an empty one, a port beyond 65535)."""
+    from interlock.sweep import SweepError
+
+    port = address.rpartition(":")[2].rstrip("/")
+    if not address.strip() or (port.isascii() and port.isdigit() and not 0 < int(port) < 65536):
+        raise SweepError(f"--scheduler {address!r} is not a Dask scheduler address; give one such as "
+                         "tcp://10.0.0.5:8786 (ports 1-65535)")
