@@ -3,9 +3,10 @@
 import numpy as np
 import pytest
 
+from interlock.formats import read
 from interlock.blocks import Assembly, rhomblock_assembly, random_hexagon
 from interlock.cli import OUTPUT_SUFFIXES, main
-from interlock.gallery import export
+from interlock.formats import write as export
 
 pytest.importorskip("rhino3dm")
 
@@ -24,7 +25,7 @@ def test_a_conversion_there_and_back_keeps_blocks_volumes_and_frame(hexagon_file
     assert main(["convert", str(there), str(back)]) == 0
     assert "(from the file)" in capsys.readouterr().out
     for path in (there, back):
-        loaded = Assembly.load(path)
+        loaded = read(path)
         assert len(loaded) == len(hexagon) and loaded.frame == hexagon.frame
         assert np.allclose(np.sort(loaded.volumes), np.sort(hexagon.volumes), rtol=1e-6)
 
@@ -32,7 +33,7 @@ def test_a_conversion_there_and_back_keeps_blocks_volumes_and_frame(hexagon_file
 def test_fixed_replaces_the_stored_frame(hexagon_file, tmp_path):
     _, source = hexagon_file
     assert main(["convert", str(source), str(tmp_path / "h.3dm"), "--fixed", "0-2"]) == 0
-    assert Assembly.load(tmp_path / "h.3dm").frame == (0, 1, 2)
+    assert read(tmp_path / "h.3dm").frame == (0, 1, 2)
 
 
 @pytest.mark.parametrize("target, message", [("h.xyz", "choose a suffix"), ("SAME", "the same file")])
@@ -56,7 +57,7 @@ def test_slow_formats_report_progress_per_block(hexagon_file, tmp_path, suffix):
     hexagon, _ = hexagon_file
     written, read = [], []
     path = export(hexagon, tmp_path / f"h{suffix}", progress=lambda done, total: written.append((done, total)))
-    Assembly.load(path, progress=lambda done, total: read.append((done, total)))
+    read(path, progress=lambda done, total: read.append((done, total)))
     assert written == [(k, len(hexagon)) for k in range(len(hexagon))]
     assert read == [(k, len(hexagon)) for k in range(len(hexagon))]
 
@@ -69,6 +70,6 @@ def test_labels_survive_every_labelled_format_and_the_others_say_they_drop_them(
     for there, back in zip(chain, chain[1:] + [tmp_path / "last.json"]):
         assert main(["convert", str(there), str(back)]) == 0
         assert "labels not kept" not in capsys.readouterr().out
-    assert Assembly.load(tmp_path / "last.json").labels == hexagon.labels
+    assert read(tmp_path / "last.json").labels == hexagon.labels
     assert main(["convert", str(source), str(tmp_path / "flat.stl")]) == 0
     assert "labels not kept (.stl stores none: use .obj, .ply, .glb, .3mf, .3dm, .json)" in capsys.readouterr().out

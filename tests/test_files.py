@@ -11,9 +11,11 @@ import time
 
 import pytest
 
+from interlock.formats import read
 from interlock.blocks import Assembly, random_hexagon, rhomblock_assembly
 from interlock.files import PARTIAL, atomic_write, replace_folder, unwritable, write_atomically
-from interlock.gallery import build, export
+from interlock.formats import write as export
+from interlock.gallery import build
 
 # --- the helpers ------------------------------------------------------------------------------------------------
 
@@ -90,7 +92,7 @@ def test_an_export_killed_after_writing_leaves_the_old_file(tmp_path, suffix):
                                stderr=subprocess.DEVNULL, text=True, start_new_session=True)
     _kill_when(process, "written")
     assert target.read_bytes() == old
-    assert len(Assembly.load(target)) == 48
+    assert len(read(target)) == 48
 
 
 @pytest.mark.parametrize("delay", [0.2, 0.6, 1.0, 1.5, 2.5])
@@ -105,7 +107,7 @@ def test_an_export_killed_at_any_moment_is_the_old_file_or_the_whole_new_one(tmp
     os.killpg(process.pid, signal.SIGKILL)
     process.wait()
     if target.read_bytes() != old:
-        loaded = Assembly.load(target)
+        loaded = read(target)
         assert len(loaded) == len(new) and loaded.frame == new.frame
 
 

@@ -10,14 +10,14 @@ import argparse
 import sys
 
 import interlock
-from interlock.cli import convert, gallery, generate, groups, periodic, stability, sweep, verify, view
+from interlock.cli import completion, convert, gallery, generate, groups, periodic, stability, sweep, verify, view
 from interlock.cli.common import EXIT_BAD_INPUT, OUTPUT_SUFFIXES
 from interlock.errors import InterlockError
 
 __all__ = ["main", "OUTPUT_SUFFIXES"]
 
 #: The commands in the order ``interlock --help`` lists them.
-COMMANDS = (groups, verify, periodic, gallery, stability, sweep, convert, generate, view)
+COMMANDS = (groups, verify, periodic, gallery, stability, sweep, convert, generate, view, completion)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -5,7 +5,8 @@ from __future__ import annotations
 import argparse
 
 from interlock import wallpaper
-from interlock.cli.common import block_limit, edge_points, lattice_arguments, output_arguments, write_assembly
+from interlock.cli.common import block_limit, edge_points, lattice_arguments, output_arguments
+from interlock.cli.convert import sized, unit_arguments
 from interlock.errors import InterlockError
 
 #: Named periodic lozenge tilings for ``generate rhomblock --periodic``: their staircase counts.
@@ -19,7 +20,8 @@ def add_parser(commands) -> None:
         "wallpaper", help="a patch of Escher blocks of a wallpaper group",
         description="Deform edges of the group's fundamental domain, build the block and write the blocks g(X) "
                     "for the tiles within --radius.",
-        epilog="example:\n  interlock generate wallpaper p4 --deform 0:0.25,0.1 --radius 2 -o p4.stl",
+        epilog="examples:\n  interlock generate wallpaper p4 --deform 0:0.25,0.1 --radius 2 -o p4.stl\n"
+               "  interlock generate wallpaper p4 --deform 0:0.25,0.1 --unit mm --scale 20 -o p4.3mf",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     escher.add_argument("group", help="wallpaper group, e.g. p4")
@@ -29,12 +31,14 @@ def add_parser(commands) -> None:
     escher.add_argument("--radius", type=float, default=2.0, help="patch radius in cell lengths (default 2)")
     lattice_arguments(escher)
     output_arguments(escher)
+    unit_arguments(escher)
     escher.set_defaults(run=run_wallpaper)
     rhomb = kinds.add_parser(
         "rhomblock", help="RhomBlocks on a random hexagon or a periodic staircase tiling",
         description="Place RhomBlocks on a uniformly random lozenge tiling of an A x B x C hexagon, or on a patch "
                     "of a periodic staircase tiling (KIND = N0,N1,N2, or one of " + ", ".join(PERIODIC_KINDS) + ").",
         epilog="examples:\n  interlock generate rhomblock --hexagon 10 10 10 --seed 1 -o hexagon.3mf\n"
+               "  interlock generate rhomblock --hexagon 4 4 4 --unit cm --scale 5 -o hexagon.3dm\n"
                "  interlock generate rhomblock --periodic 1,1,0 --variant 1 -o staircase.glb",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
@@ -45,9 +49,31 @@ def add_parser(commands) -> None:
     rhomb.add_argument("--variant", type=int, default=0, choices=(0, 1), help="RhomBlock assembly variant")
     rhomb.add_argument("--radius", type=int, default=2, help="cells around the periodic cell (default 2)")
     output_arguments(rhomb)
+    unit_arguments(rhomb)
     rhomb.set_defaults(run=run_rhomblock)
 
 
+def write_assembly(assembly, args) -> int:
+    """Write the assembly to ``-o`` (a picture for ``.png``), scaled and in the unit asked for, and say so."""
+    from pathlib import Path
+
+    from tqdm import tqdm
+
+    from interlock.cli.common import bar_progress
+    from interlock.formats import write
+    from interlock.gallery import exploded, render
+
+    assembly, words = sized(assembly, args)
+    if Path(args.output).suffix.lower() == ".png":
+        path = render(assembly, args.output, exploded=args.exploded)
+    else:
+        with tqdm(desc=f"writing {Path(args.output).name}", unit="block", disable=None, leave=False) as bar:
+            shown = exploded(assembly, args.exploded) if args.exploded else assembly
+            path = write(shown, args.output, up=args.up, progress=bar_progress(bar))
+    unit = f", unit {assembly.unit}" if assembly.unit else ""
+    size = f" ({'; '.join(words)})" if words else ""
+    print(f"wrote {path}: {len(assembly)} blocks, {len(assembly.frame)} in the frame{unit}{size}")
+    return 0
 
 
 def run_wallpaper(args) -> int:

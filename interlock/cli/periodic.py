@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import argparse
 import json
 
 from interlock import wallpaper
 from interlock.cli.common import edge_points, lattice_arguments, numbers
+from interlock.cli.verify import EXIT_STATUS, exit_status
 from interlock.errors import InterlockError
 
 
@@ -14,6 +16,9 @@ def add_parser(commands) -> None:
         "periodic", help="decide whether an infinite periodic assembly interlocks (one cell, Sec. 4.1)",
         description="Decide interlocking of the infinite assembly of an Escher block (a wallpaper group with "
                     "deformed edges) or of RhomBlocks on a periodic staircase tiling, from one cell.",
+        epilog="examples:\n  interlock periodic p4 --deform 0:0.25,0.1\n  interlock periodic --staircase 1,1,0\n\n"
+               + EXIT_STATUS,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     periodic.add_argument("group", nargs="?", help="wallpaper group of an Escher block, e.g. p4")
     periodic.add_argument("--deform", action="append", default=[], metavar="EDGE:X,Y[;X,Y...]",
@@ -49,7 +54,7 @@ def run(args) -> int:
         record = verdict.to_dict()
         record["criterion_4_3"] = None if criterion is None else criterion.to_dict()
         print(json.dumps(record, indent=2))
-        return 0
+        return exit_status(_answer(verdict))
     print(verdict)
     if criterion is not None:
         print(criterion)
@@ -58,4 +63,9 @@ def run(args) -> int:
         for b in verdict.moving:
             a, c, i = verdict.motion_blocks[b]
             print(f"   ({a:+d}, {c:+d}, {i})", " ".join(f"{x:+.4f}" for x in verdict.motion[b]))
-    return 0
+    return exit_status(_answer(verdict))
+
+
+def _answer(verdict):
+    """True, False or None (inconclusive) from a periodic verdict's status."""
+    return {"interlocked": True, "not interlocked": False}.get(verdict.status)

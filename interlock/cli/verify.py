@@ -6,8 +6,21 @@ import argparse
 import json
 import time
 
-from interlock.cli.common import (FRAME_FROM, MESH_FORMATS, MOVING_SHOWN, frame_text, load,
+from interlock.cli.common import (EXIT_BAD_INPUT, FRAME_FROM, MESH_FORMATS, MOVING_SHOWN, frame_text, load,
                                   time_limit)
+
+#: The exit status of ``verify`` and ``periodic`` by their answer, as diff and grep answer with theirs; bad input
+#: (a file that cannot be read, a wrong option) is ``EXIT_BAD_INPUT``, 2.
+EXIT_INTERLOCKED, EXIT_NOT_INTERLOCKED, EXIT_INCONCLUSIVE = 0, 1, 3
+#: The exit statuses in words, the end of the help of ``verify`` and ``periodic``.
+EXIT_STATUS = (f"exit status: {EXIT_INTERLOCKED} interlocked, {EXIT_NOT_INTERLOCKED} not interlocked, "
+               f"{EXIT_INCONCLUSIVE} inconclusive (time limit, undecided solver), {EXIT_BAD_INPUT} bad input "
+               "(unreadable file, wrong option); the same with --json")
+
+
+def exit_status(interlocked) -> int:
+    """The exit status of an answer: True, False or None (inconclusive)."""
+    return {True: EXIT_INTERLOCKED, False: EXIT_NOT_INTERLOCKED}.get(interlocked, EXIT_INCONCLUSIVE)
 
 
 def add_parser(commands) -> None:
@@ -19,7 +32,8 @@ def add_parser(commands) -> None:
                     "into every format), else none; the output says which.",
         epilog="examples:\n  interlock generate wallpaper p4 --deform 0:0.25,0.1 -o p4.vtu\n"
                "  interlock verify p4.vtu                 (the frame stored in p4.vtu)\n"
-               "  interlock verify p4.vtu --fixed 0-3,7   (another frame)",
+               "  interlock verify p4.vtu --fixed 0-3,7   (another frame)\n"
+               "  interlock verify p4.vtu && echo interlocks\n\n" + EXIT_STATUS,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     verify.add_argument("paths", nargs="+", help=f"mesh files: {MESH_FORMATS}")
@@ -75,7 +89,7 @@ def run(args) -> int:
         record["blocks"] = [str(label) for label in assembly.labels]
         record["frame_from"] = FRAME_FROM.get(assembly.info.get("frame_from"), "none")
         print(json.dumps(record, indent=2))
-        return 0
+        return exit_status(verdict.interlocked)
     print(verdict)
     print(f"blocks: {len(assembly)}, frame: {frame_text(verdict.frame, assembly.info.get('frame_from'))}, "
           f"contacts: {verdict.contacts}")
@@ -94,4 +108,4 @@ def run(args) -> int:
             print(f"frames of the motion: {len(frames)} {kinds} files in {args.frames}")
     timings = ", ".join(f"{name} {seconds:.3f}s" for name, seconds in verdict.timings.items())
     print(f"timings: {timings}")
-    return 0
+    return exit_status(verdict.interlocked)

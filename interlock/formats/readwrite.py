@@ -336,7 +336,7 @@ def _mesh_path(path) -> Path:
             raise FormatError(f"{path} is not a regular file (a pipe, socket or device); save the assembly to a "
                               "file and give that")
         if path.stat().st_size == 0:
-            raise FormatError(f"{path} is empty (0 bytes): it holds no blocks")
+            raise FormatError(f"{path} is empty (0 bytes): it holds no mesh")
     except OSError as error:
         raise FormatError(f"cannot read {path}: {error.strerror or error}") from None
     return path

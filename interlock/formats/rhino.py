@@ -145,6 +145,11 @@ def write_3dm(assembly, path, *, classes=None, version: int = RHINO_VERSION, pro
             layers[full_path] = document.Layers.Add(made)
         return layers[full_path]
 
+    if paths is None:  # a layer per class, in order, then the frame's
+        for value in sorted(set(values.tolist())):
+            layer(class_name(kind, value), LAYER_COLOURS[value % len(LAYER_COLOURS)])
+        if fixed:
+            layer(FRAME_LAYER, _FRAME_COLOUR)
     for i in range(len(assembly)):
         if progress is not None:
             progress(i, len(assembly))

@@ -142,8 +142,8 @@ def _check_ascii_stl(path: Path, text: bytes) -> bool:
         match = next(m for k, m in enumerate(_VERTEX.finditer(body)) if k == bad[0])
         number = body.count(b"\n", 0, match.start()) + 1
         line = match.group(0).decode().strip()
-        raise FormatError(f"{path} line {number}: a vertex coordinate is not a finite number (NaN, infinite, or "
-                          f"beyond the largest double, 1.8e308): {line[:60]!r}")
+        raise FormatError(f"{path} line {number}: a vertex coordinate is not a finite number: {line[:60]!r} (NaN, "
+                          "infinite, or beyond the largest double, 1.8e308)")
     return True
 
 

@@ -6,8 +6,10 @@ import numpy as np
 import pytest
 import trimesh
 
-from interlock.blocks import Assembly, load_compas
-from interlock.blocks.compas import (COMPAS_DTYPES, UPSTREAM_FINGERPRINTS, UPSTREAM_SUPPORTS, fingerprint,
+from interlock.formats import read
+from interlock.blocks import Assembly
+from interlock.formats.compas import load_compas
+from interlock.formats.compas import (COMPAS_DTYPES, UPSTREAM_FINGERPRINTS, UPSTREAM_SUPPORTS, fingerprint,
                                      write_compas)
 from interlock.errors import InterlockError
 
@@ -160,9 +162,9 @@ def test_non_convex_polygon_faces_are_triangulated(tmp_path):
 
 
 def test_assembly_load_dispatches_json(reference_data):
-    a = Assembly.load(reference_data / "compas_cra" / "cubes.json")
+    a = read(reference_data / "compas_cra" / "cubes.json")
     assert len(a) == 3 and a.frame == (0,) and a.info["format"] == "compas"
-    assert Assembly.load(reference_data / "compas_cra" / "cubes.json", frame=[2]).frame == (2,)
+    assert read(reference_data / "compas_cra" / "cubes.json", frame=[2]).frame == (2,)
 
 
 # --- writing -------------------------------------------------------------------------------------

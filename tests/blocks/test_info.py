@@ -6,10 +6,11 @@ import numpy as np
 import pytest
 import shapely
 
+from interlock.formats import read
 from interlock.blocks import Assembly, presets
 from interlock.blocks.contact import Contact, ContactError
 from interlock.blocks.info import CONTACT_TAG, ITEMS_TAG, plain, restored
-from interlock.gallery import export
+from interlock.formats import write as export
 from interlock.verify import check, contacts
 
 
@@ -41,7 +42,7 @@ def test_contacts_an_assembly_carries_survive_export_and_load(tmp_path, suffix):
     if suffix == ".3dm":
         pytest.importorskip("rhino3dm")
     pins = presets.block_on_pins()
-    back = Assembly.load(export(pins, tmp_path / f"pins{suffix}"))
+    back = read(export(pins, tmp_path / f"pins{suffix}"))
     assert _same(pins.info["contacts"], back.info["contacts"])
     first, second = check(pins), check(back)
     assert (first.interlocked, first.rank) == (second.interlocked, second.rank)
@@ -55,7 +56,7 @@ def test_numbers_json_cannot_hold_come_back_as_text(tmp_path, suffix):
     assembly = presets.cube_grid()
     assembly = Assembly(assembly.meshes, assembly.types, assembly.transforms, frame=assembly.frame,
                         info={"limit": math.inf, "scores": np.array([0.5, np.nan])})
-    back = Assembly.load(export(assembly, tmp_path / f"grid{suffix}")).info
+    back = read(export(assembly, tmp_path / f"grid{suffix}")).info
     assert back["limit"] == "inf" and back["scores"][0] == 0.5 and back["scores"][1] == "nan"
 
 
@@ -76,7 +77,7 @@ def test_an_escher_patch_keeps_its_info_exactly(tmp_path, suffix):
     from interlock.wallpaper import group
 
     assembly = patch(escher_block(group("p4"), {0: [(0.25, 0.1)]}), 2)
-    back = Assembly.load(export(assembly, tmp_path / f"p4{suffix}")).info
+    back = read(export(assembly, tmp_path / f"p4{suffix}")).info
     assert all(repr(back[key]) == repr(value) for key, value in assembly.info.items())
 
 

@@ -4,8 +4,10 @@ import numpy as np
 import pytest
 import trimesh
 
+from interlock.formats import read
 from interlock.blocks import Assembly, AssemblyError
-from interlock.blocks.meshfiles import FIXED_WORD, file_header, read_mesh_file
+from interlock.formats import read_mesh_file
+from interlock.formats.common import FIXED_WORD, file_header
 
 BUNNY_PARTS = 80
 
@@ -41,7 +43,7 @@ def _grid_obj(shared_corners=True, objects=()):
 def test_one_obj_of_touching_cubes_without_objects_gives_one_block_per_cube(tmp_path, shared_corners):
     path = tmp_path / "rhino.obj"
     path.write_text(_grid_obj(shared_corners))
-    a = Assembly.load(path)
+    a = read(path)
     assert len(a) == 9 and a.labels[0] == "rhino.obj:body0"
     np.testing.assert_allclose(a.volumes, 1.0)
     np.testing.assert_allclose(a.centroids, [[x + 0.5, y + 0.5, 0.5] for x in range(3) for y in range(3)])
@@ -62,7 +64,7 @@ def test_the_bunny_as_one_obj_without_objects(tmp_path, reference_data):
     assert not any(line.startswith(("o ", "g ")) for line in lines)
     whole = tmp_path / "bunny.obj"
     whole.write_text("\n".join(lines) + "\n")
-    one, apart = Assembly.load(whole), Assembly.load(paths)
+    one, apart = read(whole), read(paths)
     assert len(one) == BUNNY_PARTS
     np.testing.assert_allclose(one.volumes, apart.volumes, rtol=1e-12)
     np.testing.assert_allclose(one.centroids, apart.centroids, atol=1e-12)
@@ -74,7 +76,7 @@ def test_touching_bodies_in_one_plain_stl_or_ply_are_still_refused(tmp_path):
         path = tmp_path / f"row{suffix}"
         cubes.export(path)
         with pytest.raises(AssemblyError, match="several bodies that touch, which a single"):
-            Assembly.load(path)
+            read(path)
 
 
 def test_an_obj_soup_of_touching_cubes_in_one_run_is_refused(tmp_path):
@@ -84,19 +86,19 @@ def test_an_obj_soup_of_touching_cubes_in_one_run_is_refused(tmp_path):
     path.write_text("\n".join([line for line in text if line.startswith("v ")]
                               + [line for line in text if line.startswith("f ")]) + "\n")
     with pytest.raises(AssemblyError, match="several bodies that touch"):
-        Assembly.load(path)
+        read(path)
 
 
 def test_obj_objects_named_fixed_are_the_frame(tmp_path):
     names = [f"cube {k}" + (f" {FIXED_WORD}" if k in (0, 8) else "") for k in range(9)]
     path = tmp_path / "named.obj"
     path.write_text(_grid_obj(objects=names))
-    a = Assembly.load(path)
+    a = read(path)
     assert a.frame == (0, 8) and a.info["frame_from"] == "file"
     assert a.labels[0] == "named.obj:cube 0" and a.labels[8] == "named.obj:cube 8"
-    other = Assembly.load(path, frame=[4])
+    other = read(path, frame=[4])
     assert other.frame == (4,) and other.info["frame_from"] == "argument"
-    assert Assembly.load(path, frame=[]).frame == ()
+    assert read(path, frame=[]).frame == ()
 
 
 def test_obj_polygons_vertex_references_and_negative_indices(tmp_path):
@@ -108,7 +110,7 @@ def test_obj_polygons_vertex_references_and_negative_indices(tmp_path):
     lines += [f"f {k + 1} {(k + 1) % 6 + 1} {(k + 1) % 6 + 7} {k + 7}" for k in range(6)]
     path = tmp_path / "l.obj"
     path.write_text("\n".join(lines) + "\n")
-    mesh = Assembly.load(path).meshes[0]
+    mesh = read(path).meshes[0]
     assert mesh.volume == pytest.approx(3.0)
     assert mesh.area == pytest.approx(2 * 3 + 8)  # a fan would overlap itself: more area
 
@@ -117,29 +119,29 @@ def test_an_obj_cut_short_is_an_error(tmp_path):
     path = tmp_path / "grid.obj"
     text = _grid_obj(objects=[f"block_{k:04d}" for k in range(9)])
     path.write_text(f"# {file_header(9, 0, triangles=9 * 12)}\n{text}")
-    assert len(Assembly.load(path)) == 9
+    assert len(read(path)) == 9
     whole = path.read_text()
     path.write_text(whole[:whole.index("o block_0007")])  # two objects missing
     with pytest.raises(AssemblyError, match="cut short or damaged: it announces 9 blocks of 108 triangles in all, "
                                             "it holds 7 objects of 84 triangles"):
-        Assembly.load(path)
+        read(path)
     path.write_text(whole[:-12])  # in the middle of the last object's faces, and of a line
     with pytest.raises(AssemblyError, match="cut short or damaged: it announces 9 blocks of 108 triangles in all, "
                                             "it holds 9 objects of 106 triangles"):
-        Assembly.load(path)
+        read(path)
     path.write_text(f"# {file_header(9)}\n" + whole[whole.index("\n") + 1:whole.index("o block_0007")])
     with pytest.raises(AssemblyError, match="cut short or damaged: it announces 9 blocks, it holds 7"):
-        Assembly.load(path)
+        read(path)
 
 
 def test_a_malformed_obj_line_is_named(tmp_path):
     path = tmp_path / "bad.obj"
     path.write_text(_grid_obj().replace("v 0 0 1\n", "v 0 zero 1\n", 1))
     with pytest.raises(AssemblyError, match=r"bad.obj line 3: could not convert"):
-        Assembly.load(path)
+        read(path)
     path.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\nf 1 2 3\n")
     with pytest.raises(AssemblyError, match=r"vertex indices outside 1..3 \(e.g. 4\)"):
-        Assembly.load(path)
+        read(path)
 
 
 def test_read_mesh_file_gives_names_meshes_and_frame(tmp_path):
@@ -156,5 +158,5 @@ def test_one_block_with_t_junctions_in_a_file_of_its_own_stays_one_block(tmp_pat
     if suffix == ".stl":  # a plain triangle soup: the T-junctions are split before the bodies are told apart
         read_mesh_file(part).meshes[0].export(tmp_path / "part.stl")
         part = tmp_path / "part.stl"
-    a = Assembly.load(part)
+    a = read(part)
     assert len(a) == 1 and a.volumes[0] == pytest.approx(7 * 0.2 ** 3, rel=1e-6)

@@ -8,10 +8,12 @@ import numpy as np
 import pytest
 import trimesh
 
+from interlock.formats import read
 from interlock.blocks import Assembly, AssemblyError, presets
-from interlock.blocks.meshfiles import GLTF_TO_Z_UP, read_mesh_file
+from interlock.formats import read_mesh_file
+from interlock.formats.common import GLTF_TO_Z_UP
 from interlock.cli import main
-from interlock.gallery.export import export
+from interlock.formats import write as export
 
 # a 3 x 3 grid of touching unit cubes, block k at (k // 3, k % 3, 0)
 GRID = [trimesh.creation.box(bounds=[[x, y, 0], [x + 1, y + 1, 1]]) for x in range(3) for y in range(3)]
@@ -91,7 +93,7 @@ def test_welded_cubes_that_touch_along_an_edge_only_are_told_apart_by_their_edge
     diagonal = [GRID[0], GRID[4], GRID[8]]  # (0, 0), (1, 1), (2, 2): each shares one edge with the next
     path = tmp_path / "diagonal.obj"
     path.write_text(_welded_obj(diagonal))
-    a = Assembly.load(path)
+    a = read(path)
     assert len(a) == 3
     np.testing.assert_allclose(a.volumes, 1.0)
     np.testing.assert_allclose(a.centroids, [[0.5, 0.5, 0.5], [1.5, 1.5, 0.5], [2.5, 2.5, 0.5]])
@@ -176,7 +178,7 @@ def test_a_flat_block_is_one_error_without_warnings(tmp_path):
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         with pytest.raises(AssemblyError, match=r"block 0 \(flat.obj:body0\) encloses no volume"):
-            Assembly.load(path)
+            read(path)
     assert [str(w.message) for w in caught] == []
 
 
@@ -233,6 +235,6 @@ def test_bodies_with_repeated_or_flipped_triangles_load_as_the_solids_they_bound
     flipped = trimesh.Trimesh(right.vertices, np.vstack([right.faces[:-1], right.faces[-1:, ::-1]]), process=False)
     path = tmp_path / f"cad{suffix}"
     trimesh.util.concatenate([repeated, flipped]).export(path)
-    loaded = Assembly.load(path)
+    loaded = read(path)
     assert len(loaded) == 2 and loaded.volumes.tolist() == pytest.approx([1.0, 1.0])
     assert sorted(len(mesh.faces) for mesh in loaded.meshes) == [12, 12]

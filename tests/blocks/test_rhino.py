@@ -12,9 +12,9 @@ import trimesh
 from interlock import wallpaper
 from interlock.blocks import Assembly, cell_patch, escher_block, patch, periodic_cell, presets, random_hexagon
 from interlock.blocks import rhomblock_assembly
-from interlock.blocks.assembly import load_3dm as read_3dm
+from interlock.formats.rhino import read_3dm
 from interlock.blocks.classes import block_classes
-from interlock.blocks.rhino import FRAME_LAYER, INFO_KEY, MARKER_KEY, RhinoError, write_3dm
+from interlock.formats.rhino import FRAME_LAYER, INFO_KEY, MARKER_KEY, RhinoError, write_3dm
 from interlock.errors import InterlockError
 from interlock.gallery import appearance
 

@@ -26,7 +26,8 @@ from interlock.verify.statics.interfaces import statics_contacts
 
 __all__ = ["StabilityError", "StabilityResult", "EquilibriumSystem", "equilibrium_matrix", "friction_block",
            "friction_matrix", "friction_utilisation", "gravity_vector", "nonnegative", "positive",
-           "block_densities", "json_float", "CONES", "DEFAULT_SIDES", "LARGE_LP", "DEFAULT_EPS", "DEFAULT_ETA",
+           "block_densities", "force_units", "json_float", "CONES", "DEFAULT_SIDES", "LARGE_LP", "DEFAULT_EPS",
+           "DEFAULT_ETA",
            "FRICTION_RTOL", "MU_MIN", "MU_MAX", "RBE_ITERATIONS", "contact_words", "clarabel_lp", "clarabel_solve",
            "friction_coefficient", "highs_lp", "Budget", "TimeLimitReached"]
 
@@ -111,7 +112,9 @@ class StabilityResult:
         ``"time limit reached in <stage>"``.
     contacts : tuple of Contact
     parameters : dict
-        ``mu``, ``cone``, ``sides``, ``density``, ``gravity``, ``frame``, and ``contacts``: how the
+        ``mu``, ``cone``, ``sides``, ``density``, ``gravity``, ``frame``, the units (:func:`force_units`:
+        ``unit``, ``density_unit``, ``force_unit``: forces are density x volume, the volume in the model's unit
+        cubed), and ``contacts``: how the
         contacts were found (:func:`~interlock.verify.statics.interfaces.statics_contacts`; by default
         the interface rule of :func:`~interlock.verify.statics.interfaces.interfaces` and its tolerances).
     timings : dict
@@ -131,12 +134,17 @@ class StabilityResult:
     parameters: dict = field(default_factory=dict)
     timings: dict = field(default_factory=dict)
 
+    def __bool__(self):
+        raise TypeError("the truth value of a StabilityResult is ambiguous (it may be inconclusive): use "
+                        "result.stable, which is True, False or None (inconclusive)")
+
     def __str__(self) -> str:
         verdict = {True: "stable", False: "unstable"}.get(self.stable, f"inconclusive ({self.message})")
         p = self.parameters
         extra = f", friction utilisation {self.friction_utilisation:.3g}" if self.stable is True else ""
+        units = f", forces in {p['force_unit']}" if self.stable is True and "force_unit" in p else ""
         return (f"RBE {verdict} (mu {p.get('mu')}, {p.get('cone')} cone with {p.get('sides')} sides): "
-                f"{len(self.contacts)} contacts{contact_words(p)}, {len(self.forces)} vertex forces{extra}; "
+                f"{len(self.contacts)} contacts{contact_words(p)}, {len(self.forces)} vertex forces{extra}{units}; "
                 f"{sum(self.timings.values()):.3g} s")
 
     def to_dict(self) -> dict:
@@ -205,7 +213,7 @@ class EquilibriumSystem:
         uniform = bool(np.all(density == density[0])) if len(density) else True
         parameters = {"mu": float(mu), "cone": cone, "sides": int(sides),
                       "density": float(density[0]) if uniform and len(density) else density.tolist(),
-                      "frame": list(fixed), "contacts": contact_model}
+                      **force_units(assembly.unit), "frame": list(fixed), "contacts": contact_model}
         timings = {"contacts": found_at - started, "build": built - found_at}
         return cls(a_eq, a_ub, cone_rows, cost, bounds, weights, arms, free, frames, points, vertex_contact, used,
                    parameters, timings)
@@ -486,6 +494,24 @@ def positive(name: str, value) -> float:
     if isinstance(value, bool) or not isinstance(value, Real) or not math.isfinite(value) or value <= 0:
         raise StabilityError(f"{name} must be a finite number > 0, got {value!r}")
     return float(value)
+
+
+def force_units(unit: str | None) -> dict[str, str | None]:
+    """How the forces of a model in ``unit`` are measured: ``density`` is a weight per cubic ``unit`` (a block
+    weighs density x volume, the volume in ``unit`` cubed) and every force is in the density's weight unit
+    times ``unit`` cubed: with density 24 kN/m^3 and a model in metres, kN.
+
+    >>> force_units("m")["force_unit"], force_units("m")["density_unit"]
+    ('density x m^3', 'weight per cubic m (with a density in kN/m^3, forces are in kN)')
+    >>> force_units(None)["density_unit"]
+    'weight per cubic model unit (the model states no unit)'
+    """
+    if unit is None:
+        return {"unit": None, "density_unit": "weight per cubic model unit (the model states no unit)",
+                "force_unit": "density x model unit^3"}
+    example = "kN" if unit == "m" else "N"
+    return {"unit": unit, "force_unit": f"density x {unit}^3",
+            "density_unit": f"weight per cubic {unit} (with a density in {example}/{unit}^3, forces are in {example})"}
 
 
 def block_densities(density, count: int) -> np.ndarray:

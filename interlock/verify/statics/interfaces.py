@@ -13,7 +13,6 @@ interfaces a COMPAS file stores instead.
 
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -24,12 +23,14 @@ import shapely
 from interlock.blocks.assembly import Assembly
 from interlock.blocks.contact import Contact, plane_bases
 from interlock.errors import InterlockError
+from interlock.formats.common import FormatError
+from interlock.formats.compas import read_json_document
 from interlock.verify.contacts import DEFAULT_CONTACT_RTOL
 from interlock.verify.contacts import contacts as find_contacts
 from interlock.verify.validate import OverlapError, pair_overlaps, refuse_overlaps_without_contact
 
-__all__ = ["Interfaces", "interfaces", "thickness", "compas_interfaces", "statics_contacts", "refuse_deep_overlaps",
-           "DEFAULT_GAP_THICKNESS", "DEFAULT_AREA_THICKNESS", "CONTACT_MODELS"]
+__all__ = ["Interfaces", "interfaces", "thickness", "compas_interfaces", "plain_geometry", "statics_contacts",
+           "refuse_deep_overlaps", "DEFAULT_GAP_THICKNESS", "DEFAULT_AREA_THICKNESS", "CONTACT_MODELS"]
 
 #: Largest gap between two facing faces, as a fraction of the thinner block's thickness (:func:`thickness`).
 #: The armadillo's 1,043 touching pairs (1,014 with a free block, as upstream's interfaces with tmax = 0.05)
@@ -306,7 +307,7 @@ def compas_interfaces(path, assembly: Assembly) -> tuple[Contact, ...]:
     ``(v, u)`` with ``-zaxis`` and the axes swapped.  Blocks are matched by
     node key: ``assembly.info["node_keys"]`` when the file names its nodes
     (labels differ from keys), else ``assembly.labels``, as
-    :func:`~interlock.blocks.assembly.load_compas` sets them.  Vertices are ordered counter-clockwise about the normal;
+    :func:`~interlock.formats.compas.load_compas` sets them.  Vertices are ordered counter-clockwise about the normal;
     ``deviation`` is their largest distance from the frame's plane.
 
     Parameters
@@ -330,7 +331,10 @@ def compas_interfaces(path, assembly: Assembly) -> tuple[Contact, ...]:
     """
     path = Path(path)
     try:
-        document = json.loads(path.read_text())
+        document = read_json_document(path, "COMPAS file")
+    except FormatError as error:
+        raise InterfaceError(str(error)) from None
+    try:
         graph = document["data"]["graph"]
         graph = graph.get("data", graph)
         edges = graph.get("edge", {})
@@ -357,11 +361,10 @@ def compas_interfaces(path, assembly: Assembly) -> tuple[Contact, ...]:
 def _compas_contact(path, item, a: int, b: int) -> Contact:
     data = item.get("data", item) if isinstance(item, dict) else None
     try:
-        frame = data["frame"]
-        frame = frame.get("data", frame)
+        frame = plain_geometry(data["frame"])
         origin = np.asarray(frame["point"], dtype=float)
         x, y = np.asarray(frame["xaxis"], dtype=float), np.asarray(frame["yaxis"], dtype=float)
-        points = np.asarray(data["points"], dtype=float).reshape(-1, 3)
+        points = np.asarray(plain_geometry(data["points"]), dtype=float).reshape(-1, 3)
     except (KeyError, TypeError, ValueError, AttributeError):
         raise InterfaceError(f"{path.name}: an interface of edge {a}-{b} has no frame or points") from None
     z = np.cross(x, y)
@@ -384,6 +387,27 @@ def _compas_contact(path, item, a: int, b: int) -> Contact:
         array.setflags(write=False)
     return Contact(int(i), int(j), arrays[0], arrays[1], float(abs(polygon.area)), -1, -1, polygon, arrays[2],
                    arrays[3], deviation, True, 0.0)
+
+
+def plain_geometry(value):
+    """COMPAS geometry data as plain numbers and lists: COMPAS 2 stores a point, vector or frame as an object
+    ``{"dtype": "compas.geometry/Point", "data": [x, y, z], "guid": ...}`` (a frame's ``data`` a dict of its
+    ``point``, ``xaxis`` and ``yaxis``, each a list or again such an object); COMPAS 1 and compas_cra's older
+    files store the plain lists.  Both read the same.
+
+    >>> plain_geometry({"dtype": "compas.geometry/Frame", "data": {"point": {"dtype": "compas.geometry/Point",
+    ...     "data": [0, 0, 1]}, "xaxis": [1, 0, 0], "yaxis": [0, 1, 0]}})
+    {'point': [0, 0, 1], 'xaxis': [1, 0, 0], 'yaxis': [0, 1, 0]}
+    >>> plain_geometry([{"dtype": "compas.geometry/Point", "data": [1, 2, 3]}, [4, 5, 6]])
+    [[1, 2, 3], [4, 5, 6]]
+    """
+    if isinstance(value, dict) and "data" in value and ("dtype" in value or set(value) <= {"data", "guid", "name"}):
+        return plain_geometry(value["data"])
+    if isinstance(value, dict):
+        return {key: plain_geometry(item) for key, item in value.items()}
+    if isinstance(value, list):
+        return [plain_geometry(item) for item in value]
+    return value
 
 
 def _tolerance(name, value) -> float:
