@@ -1,4 +1,4 @@
-"""Vertex and edge contacts between blocks (main paper Remark 3.11): vertex-face, edge-edge, vertex-edge, vertex-vertex."""
+"""Point contacts of blocks (main paper Remark 3.11): vertex-face, edge-edge, vertex-edge, vertex-vertex."""
 
 from __future__ import annotations
 
@@ -6,7 +6,6 @@ from dataclasses import dataclass
 
 import numpy as np
 import shapely
-from scipy.optimize import nnls
 from scipy.spatial import cKDTree
 
 from interlock.blocks.contact import Contact, plane_bases
@@ -27,25 +26,27 @@ CONE_ANGLE = 1e-4
 
 @dataclass(frozen=True, eq=False)
 class Features:
-    """The corners and feature edges of one closed mesh, in its own frame.
+    """The corners and feature edges of one closed mesh, in its own frame, with their tangent cones.
 
     A *corner* is a vertex where three or more facets meet; a *feature edge*
     is a mesh edge between two different facets (triangulation diagonals
-    inside a facet are none).  ``corner_normals[k]`` are the outward normals
-    of the facets at corner ``corners[k]``; ``edge_normals[e]`` those of the
-    two facets at edge ``e``.  Only convex corners and edges (every feature
-    edge at a corner convex; an edge whose dihedral angle is below pi) take
-    part in point contacts: at a reflex edge or a saddle the local solid is
-    no convex cone, and no contact is made of it (a contact left out only
-    weakens the model, never makes a motion look blocked).
+    inside a facet are none).  The solid near a point of it is a cone, given
+    by generators (unit *rays*): at corner ``corners[k]`` the directions of
+    its feature edges (``corner_rays[k]``); along edge ``e`` its direction
+    both ways and, in each of its two facets, the direction away from the
+    edge (``edge_rays[e]``, four rows).  Only convex corners and edges
+    (every feature edge at a corner convex; an edge whose dihedral angle is
+    below pi) take part in point contacts: at a reflex edge or a saddle the
+    local solid is no convex cone, and no contact is made of it (a contact
+    left out only weakens the model, never makes a motion look blocked).
     """
 
     vertices: np.ndarray
     corners: np.ndarray
-    corner_normals: tuple
+    corner_rays: tuple
     corner_convex: np.ndarray
     edges: np.ndarray
-    edge_normals: np.ndarray
+    edge_rays: np.ndarray
     edge_convex: np.ndarray
     is_corner: np.ndarray
 
@@ -57,87 +58,112 @@ def features(mesh, facets) -> Features:
     >>> from interlock.verify.facets import facets as find_facets, merged
     >>> box = merged(trimesh.creation.box())
     >>> f = features(box, find_facets(box))
-    >>> len(f.corners), len(f.edges), bool(f.corner_convex.all() and f.edge_convex.all())
-    (8, 12, True)
+    >>> len(f.corners), len(f.edges), [len(r) for r in f.corner_rays][:3], f.edge_rays.shape
+    (8, 12, [3, 3, 3], (12, 4, 3))
     """
-    faces = np.asarray(mesh.faces)
+    return _features_of([mesh], [facets])[0]
+
+
+def _features_of(meshes, facets_list) -> list:
+    """The :class:`Features` of several merged meshes at once (one pass of array operations over all of them)."""
+    import trimesh
+
+    vertex_counts = np.array([len(m.vertices) for m in meshes])
+    face_counts = np.array([len(m.faces) for m in meshes])
+    facet_counts = np.array([len(f.normals) for f in facets_list])
+    vertex_start, facet_start = np.r_[0, np.cumsum(vertex_counts)], np.r_[0, np.cumsum(facet_counts)]
+    face_start = np.r_[0, np.cumsum(face_counts)]
+    vertices = np.vstack([np.asarray(m.vertices, dtype=float) for m in meshes]).reshape(-1, 3)
+    faces = np.vstack([np.asarray(m.faces) + o for m, o in zip(meshes, vertex_start)]).reshape(-1, 3)
     label = np.full(len(faces), -1)
-    for f, members in enumerate(facets.faces):
-        label[members] = f
-    vertices = np.asarray(mesh.vertices, dtype=float)
-    adjacency = np.asarray(mesh.face_adjacency).reshape(-1, 2)
-    shared = np.asarray(mesh.face_adjacency_edges).reshape(-1, 2)
-    unshared = np.asarray(mesh.face_adjacency_unshared).reshape(-1, 2)
+    for k, f in enumerate(facets_list):
+        for facet, members in enumerate(f.faces):
+            label[face_start[k] + np.asarray(members, dtype=int)] = facet_start[k] + facet
+    normals = np.vstack([np.asarray(f.normals) for f in facets_list]).reshape(-1, 3)
+    whole = trimesh.Trimesh(vertices, faces, process=False)
+    adjacency = np.asarray(whole.face_adjacency).reshape(-1, 2)
+    shared = np.asarray(whole.face_adjacency_edges).reshape(-1, 2)
+    unshared = np.asarray(whole.face_adjacency_unshared).reshape(-1, 2)
     la, lb = label[adjacency[:, 0]], label[adjacency[:, 1]]
     feature = (la >= 0) & (lb >= 0) & (la != lb)
     la, lb, shared, unshared = la[feature], lb[feature], shared[feature], unshared[feature]
-    normals = np.asarray(facets.normals)
-    edge_normals = np.stack([normals[la], normals[lb]], axis=1)
     # convex: the other facet's far vertex lies below this facet's plane
     far = np.einsum("ki,ki->k", normals[la], vertices[unshared[:, 1]] - vertices[shared[:, 0]])
     edge_convex = far < 0
-    # corners: three or more facets at a vertex
+    direction = vertices[shared[:, 1]] - vertices[shared[:, 0]]
+    direction = direction / np.maximum(np.linalg.norm(direction, axis=1), 1e-300)[:, None]
+    inward = []  # in each facet, the direction away from the edge: perpendicular to it, below the other facet
+    for mine, other in ((normals[la], normals[lb]), (normals[lb], normals[la])):
+        d = _cross(direction, mine)
+        d = d / np.maximum(np.linalg.norm(d, axis=1), 1e-300)[:, None]
+        inward.append(np.where((np.einsum("ki,ki->k", d, other) > 0)[:, None], -d, d))
+    edge_rays = np.stack([direction, -direction, inward[0], inward[1]], axis=1)
+    # corners: three or more facets at a vertex; their rays: the directions of their feature edges
     used = label >= 0
     pairs = np.unique(np.column_stack([faces[used].ravel(), np.repeat(label[used], 3)]), axis=0)
-    count = np.bincount(pairs[:, 0], minlength=len(vertices))
-    is_corner = count >= 3
-    corners = np.flatnonzero(is_corner)
-    starts = np.searchsorted(pairs[:, 0], corners)
-    corner_normals = tuple(normals[pairs[s:s + c, 1]] for s, c in zip(starts, count[corners]))
+    is_corner = np.bincount(pairs[:, 0], minlength=len(vertices)) >= 3
+    ends = np.concatenate([shared[:, 0], shared[:, 1]])
+    rays = np.concatenate([direction, -direction])
+    order = np.argsort(ends, kind="stable")
+    ends, rays = ends[order], rays[order]
     reflex_at = np.zeros(len(vertices), dtype=bool)
     reflex_at[shared[~edge_convex].ravel()] = True
-    for array in (vertices, corners, edge_normals, edge_convex, is_corner):
-        array.setflags(write=False)
-    return Features(vertices, corners, corner_normals, ~reflex_at[corners], shared, edge_normals, edge_convex,
-                    is_corner)
+    edge_mesh = np.searchsorted(vertex_start, shared[:, 0], side="right") - 1
+    out = []
+    for k in range(len(meshes)):
+        lo, hi = vertex_start[k], vertex_start[k + 1]
+        corners = np.flatnonzero(is_corner[lo:hi])
+        first, last = np.searchsorted(ends, corners + lo), np.searchsorted(ends, corners + lo, side="right")
+        mine = edge_mesh == k
+        arrays = [vertices[lo:hi].copy(), corners, edge_rays[mine], edge_convex[mine], is_corner[lo:hi].copy()]
+        for array in arrays:
+            array.setflags(write=False)
+        out.append(Features(arrays[0], corners, tuple(rays[a:b] for a, b in zip(first, last)),
+                            ~reflex_at[corners + lo], shared[mine] - lo, arrays[2], arrays[3], arrays[4]))
+    return out
 
 
-def admissible_normals(outward_i, outward_j, angle: float = CONE_ANGLE) -> np.ndarray:
+def admissible_normals(rays_i, rays_j, angle: float = CONE_ANGLE) -> np.ndarray:
     """The cone of admissible normals where convex features of blocks ``i`` and ``j`` touch, as generators.
 
-    ``outward_i`` are the outward normals of block ``i``'s facets at the
-    contact point (one for a face, two for an edge, three or more for a
-    corner), ``outward_j`` block ``j``'s.  A plane with normal ``n`` (from
-    ``i`` towards ``j``) separates the two local cones exactly when ``n`` is
-    in the polar cone of ``i``'s, ``cone(outward_i)``, and in the dual of
-    ``j``'s, ``cone(-outward_j)``; the admissible normals are their
-    intersection.  Returns one unit row when the intersection is one ray
+    ``rays_i`` generate block ``i``'s solid near the contact point (its
+    tangent cone ``K_i``: the directions of a corner's edges; an edge's
+    direction both ways and the directions into its two faces; a face's
+    plane both ways and the inward normal), ``rays_j`` block ``j``'s.  A plane
+    with normal ``n`` (from ``i`` towards ``j``) separates the two cones
+    exactly when ``n . d <= 0`` for every ray ``d`` of ``K_i`` and
+    ``n . d >= 0`` for every ray of ``K_j``: the admissible normals are the
+    polyhedral cone these inequalities cut out.  Its extreme rays lie where
+    two of its planes meet.  Returns one unit row when the cone is one ray
     (within ``angle``), its extreme rays when it is wider, and no row when it
-    is empty (the blocks press into each other there).
+    is only zero (the blocks press into each other there).
 
-    >>> admissible_normals([[1, 0, 0]], [[-1, 0, 0]]).tolist()        # a face on a face
+    >>> x, y, z = np.eye(3)
+    >>> corner = [-x, -y, -z]                     # the corner (1, 1, 1) of the unit cube, edges towards the origin
+    >>> admissible_normals(corner, [x, -y, -z]).round(12).tolist()   # a cube beside it, corner on corner: faces meet
     [[1.0, 0.0, 0.0]]
-    >>> len(admissible_normals([[1, 0, 0], [0, 1, 0]], [[-1, 0, 0], [0, -1, 0]]))  # diagonal cubes' edges
+    >>> len(admissible_normals(corner, [x, y, -z]))   # the diagonal cube of the grid: a cone of normals
     2
+    >>> len(admissible_normals(corner, [x, y, z]))    # corner on corner, tip to tip: a cone with 3 edges
+    3
     """
-    G = _unit(np.asarray(outward_i, dtype=float).reshape(-1, 3))
-    H = _unit(-np.asarray(outward_j, dtype=float).reshape(-1, 3))
-    candidates = [G, H]
-    planes_g = _face_planes(G)
-    planes_h = _face_planes(H)
-    if len(planes_g) and len(planes_h):
-        meet = np.cross(planes_g[:, None], planes_h[None]).reshape(-1, 3)
-        meet = meet[np.linalg.norm(meet, axis=1) > 1e-12]
-        if len(meet):
-            meet = _unit(meet)
-            candidates += [meet, -meet]
-    rays = np.vstack(candidates)
+    A = np.vstack([_unit(np.asarray(rays_i, dtype=float).reshape(-1, 3)),
+                   -_unit(np.asarray(rays_j, dtype=float).reshape(-1, 3))])
+    a, b = _PAIRS[len(A)] if len(A) < len(_PAIRS) else np.triu_indices(len(A), 1)
+    candidates = _cross(A[a], A[b])
+    size = np.linalg.norm(candidates, axis=1)
+    candidates = candidates[size > 1e-9] / size[size > 1e-9, None]
+    candidates = np.vstack([candidates, -candidates])
     tol = np.sin(angle)
-    inside = np.array([_in_cone(G, r, tol) and _in_cone(H, r, tol) for r in rays], dtype=bool)
-    rays = rays[inside]
+    rays = candidates[(candidates @ A.T <= tol).all(axis=1)]
     if not len(rays):
         return np.zeros((0, 3))
     mean = rays.sum(axis=0)
-    if np.linalg.norm(mean) > 1e-12:
+    if np.linalg.norm(mean) > 1e-9:
         mean /= np.linalg.norm(mean)
-        if np.all(np.linalg.norm(np.cross(rays, mean), axis=1) <= tol) and np.all(rays @ mean > 0):
+        if np.all(np.linalg.norm(_cross(rays, mean[None]), axis=1) <= tol) and np.all(rays @ mean > 0):
             return mean[None]
-    # distinct rays only
-    kept = []
-    for r in rays:
-        if all(np.linalg.norm(r - k) > tol for k in kept):
-            kept.append(r)
-    return np.array(kept)
+    return _distinct(rays, tol)
 
 
 def implied_by_faces(point: np.ndarray, faces, tol: float) -> bool:
@@ -176,32 +202,66 @@ def point_contacts(table, pairs, tolerances, faces=()) -> tuple[Contact, ...]:
     Each has one vertex, the contact point, and zero area.  For a
     vertex-face contact ``facet_i`` (or ``facet_j``) names the face's facet,
     the other is -1: the vertex belongs to the other block.
+
+    Notes
+    -----
+    All features of all blocks of the pairs are searched at once: k-d trees
+    over corners, edge midpoints and facet centres (grouped by size within a
+    factor 4), exact distances vectorised, then the implied points dropped;
+    only the few touches left have their cones computed one by one.  The
+    cost is ``O(V log V)`` in the number of features plus the touches.
     """
-    by_pair = {}
-    for c in faces:
-        by_pair.setdefault((c.i, c.j), []).append(c)
-    found = []
-    cache = {}
-    for i, j in np.asarray(pairs, dtype=int).reshape(-1, 2).tolist():
-        a, b = _placed(table, i, cache), _placed(table, j, cache)
-        if a is None or b is None:
+    pairs = np.unique(np.sort(np.asarray(pairs, dtype=int).reshape(-1, 2), axis=1), axis=0)
+    pairs = pairs[pairs[:, 0] != pairs[:, 1]]
+    if not len(pairs):
+        return ()
+    count = int(pairs.max()) + 1
+    keys = pairs[:, 0] * count + pairs[:, 1]
+    blocks = np.unique(pairs)
+    types = sorted({int(table.types[b]) for b in blocks} & set(table.per_type))
+    cache = dict(zip(types, _features_of([table.merged[t] for t in types], [table.per_type[t] for t in types])))
+    placed = [p for p in (_placed(table, int(b), cache) for b in blocks) if p is not None]
+    if not placed:
+        return ()
+    every = _Everything(placed)
+    search = np.asarray(tolerances.search, dtype=float)
+    reach = 2.0 * float(search[np.unique(pairs)].max())
+    angle = max(float(tolerances.angle), CONE_ANGLE)
+
+    def paired(a, b):  # the candidate pairs among blocks a, b (either order)
+        lo, hi = np.minimum(a, b), np.maximum(a, b)
+        return (a != b) & np.isin(lo * count + hi, keys)
+
+    found = []  # (i, j, kind, point, normals or None, rays_i, rays_j, gap, facet_i, facet_j)
+    found += _vertex_vertex(every, search, reach, paired)
+    found += _vertex_edge(every, search, reach, paired)
+    found += _edge_edge(every, search, reach, paired, angle)
+    found += _vertex_face(table, every, search, reach, paired, count, keys)
+    if not found:
+        return ()
+    found = _unimplied(found, faces, search)
+    kept, made = {}, []
+    for i, j, kind, point, normals, rays_i, rays_j, gap, facet_i, facet_j in found:
+        tol = float(search[i] + search[j])
+        if any(np.linalg.norm(q - point) <= tol for q in kept.get((i, j, kind), ())):
+            continue  # the same touch found twice (collinear edge pieces, both blocks' sides)
+        if normals is None:
+            normals = admissible_normals(rays_i, rays_j, angle)
+        elif not _separates(normals[0], rays_i, rays_j, angle):
+            normals = np.zeros((0, 3))
+        if not len(normals):  # the local solids reach through each other: no contact of this kind
             continue
-        tol = float(tolerances.search[i] + tolerances.search[j])
-        rounding = float(max(tolerances.rounding[i], tolerances.rounding[j]))
-        coincide = float(max(tolerances.coincide[i], tolerances.coincide[j]))
-        angle = max(float(tolerances.angle), CONE_ANGLE)
-        contacts = _pair_points(table, i, j, a, b, tol, angle)
-        pair_faces = by_pair.get((i, j), ())
-        kept = []
-        for kind, point, normals, gap, facet_i, facet_j in contacts:
-            if implied_by_faces(point, pair_faces, tol):
-                continue
-            if any(k[0] == kind and np.linalg.norm(k[1] - point) <= tol for k in kept):
-                continue  # the same touch found twice (collinear edge pieces, both corners' sides)
-            kept.append((kind, point, normals, gap, facet_i, facet_j))
-        for kind, point, normals, gap, facet_i, facet_j in kept:
-            found.append(_contact(i, j, kind, point, normals, gap, facet_i, facet_j, rounding, coincide))
-    return tuple(found)
+        kept.setdefault((i, j, kind), []).append(point)
+        made.append((i, j, kind, point, normals, gap, facet_i, facet_j))
+    if not made:
+        return ()
+    representative = np.array([m[4].sum(axis=0) for m in made])
+    representative /= np.linalg.norm(representative, axis=1)[:, None]
+    bases = plane_bases(representative)
+    rounding, coincide = np.asarray(tolerances.rounding, float), np.asarray(tolerances.coincide, float)
+    return tuple(_contact(*m, representative[k], bases[k], float(max(rounding[m[0]], rounding[m[1]])),
+                          float(max(coincide[m[0]], coincide[m[1]])))
+                 for k, m in enumerate(made))
 
 
 def contact_kinds(found) -> dict:
@@ -233,182 +293,227 @@ class _Placed:
     vertices: np.ndarray
     corners: np.ndarray  # corner vertex indices, convex ones only
     corner_points: np.ndarray
-    corner_normals: tuple
+    corner_rays: tuple
     edges: np.ndarray  # convex feature edges (vertex index pairs)
-    edge_normals: np.ndarray
+    edge_rays: np.ndarray
     is_corner: np.ndarray
 
 
 def _placed(table, block: int, cache: dict):
-    """Block ``block``'s convex features in world coordinates (cached per call, features per mesh type)."""
-    if block in cache:
-        return cache[block]
+    """Block ``block``'s convex features in world coordinates (features cached per mesh type)."""
     t = int(table.types[block])
-    if t not in table.per_type:
-        cache[block] = None
+    if t not in cache:
         return None
-    if ("type", t) not in cache:
-        cache[("type", t)] = features(table.merged[t], table.per_type[t])
-    feats = cache[("type", t)]
+    feats = cache[t]
     rotation, shift = table.transforms[block, :3, :3], table.transforms[block, :3, 3]
     vertices = feats.vertices @ rotation.T + shift
     convex = feats.corner_convex
     corners = feats.corners[convex]
-    normals = tuple(n @ rotation.T for n, ok in zip(feats.corner_normals, convex) if ok)
+    rays = tuple(r @ rotation.T for r, ok in zip(feats.corner_rays, convex) if ok)
     edges = feats.edges[feats.edge_convex]
-    edge_normals = feats.edge_normals[feats.edge_convex] @ rotation.T
-    placed = _Placed(block, vertices, corners, vertices[corners], normals, edges, edge_normals, feats.is_corner)
-    cache[block] = placed
-    return placed
+    edge_rays = feats.edge_rays[feats.edge_convex] @ rotation.T
+    return _Placed(block, vertices, corners, vertices[corners], rays, edges, edge_rays, feats.is_corner)
 
 
-def _pair_points(table, i, j, a: _Placed, b: _Placed, tol: float, angle: float):
-    """(kind, point, normals, gap, facet_i, facet_j) of every touch of features of blocks i (a) and j (b)."""
-    out = []
-    # vertex-face: corners of one block strictly inside a facet of the other
-    for corner_block, face_block, sign in ((b, a, 1.0), (a, b, -1.0)):
-        out += _vertex_face(table, corner_block, face_block, sign, tol, angle, i)
-    # edge-edge, not parallel, crossing at interior points
-    out += _edge_edge(a, b, tol, angle)
-    # vertex-edge and vertex-vertex: the cone of admissible normals
-    out += _vertex_edge(a, b, tol, angle, 1.0)
-    out += _vertex_edge(b, a, tol, angle, -1.0)
-    out += _vertex_vertex(a, b, tol, angle)
-    return out
+class _Everything:
+    """The convex corners and feature edges of several placed blocks, concatenated."""
+
+    def __init__(self, placed):
+        self.corner_points = np.vstack([p.corner_points for p in placed]).reshape(-1, 3)
+        self.corner_block = np.concatenate([np.full(len(p.corners), p.block) for p in placed])
+        self.corner_rays = [r for p in placed for r in p.corner_rays]
+        self.edge_p = np.vstack([p.vertices[p.edges[:, 0]] for p in placed]).reshape(-1, 3)
+        self.edge_q = np.vstack([p.vertices[p.edges[:, 1]] for p in placed]).reshape(-1, 3)
+        self.edge_block = np.concatenate([np.full(len(p.edges), p.block) for p in placed])
+        self.edge_rays = np.vstack([p.edge_rays for p in placed]).reshape(-1, 4, 3)
+        # whether each end of an edge is a corner (a touch there is no edge touch)
+        self.end_corner = np.vstack([p.is_corner[p.edges] for p in placed]).reshape(-1, 2)
+        self.mid = (self.edge_p + self.edge_q) / 2
+        self.half = np.linalg.norm(self.edge_q - self.edge_p, axis=1) / 2
 
 
-def _vertex_face(table, corner_block: _Placed, face_block: _Placed, sign, tol, angle, i):
-    """Corners of ``corner_block`` within ``tol`` of a facet of ``face_block``, strictly inside it."""
-    if not len(corner_block.corners):
-        return []
-    block = face_block.block
-    facets = np.arange(table.start[block], table.start[block + 1])
-    if not len(facets):
-        return []
-    normals, origins = table.normals[facets], table.origins[facets]
-    box = shapely.bounds(table.polygons[facets])
-    radius = np.hypot(np.maximum(np.abs(box[:, 0]), np.abs(box[:, 2])), np.maximum(np.abs(box[:, 1]), np.abs(box[:, 3])))
-    points = corner_block.corner_points
-    hits = _near(origins, radius, points, np.zeros(len(points)), tol)
-    out = []
-    for f, k in hits:
-        g = facets[f]
-        offset = points[k] - origins[f]
-        distance = float(offset @ normals[f])
-        if abs(distance) > tol:
-            continue
-        xy = shapely.Point(offset @ table.bases[g].T)
-        polygon = table.polygons[g]
-        if not polygon.contains(xy) or polygon.boundary.distance(xy) <= tol:
-            continue
-        n = normals[f]
-        cone = admissible_normals(n, corner_block.corner_normals[k], angle)
-        if len(cone) != 1:  # the corner's solid reaches through the face: they press into each other
-            continue
-        local = int(table.local[g])
-        facet_i, facet_j = (local, -1) if sign > 0 else (-1, local)
-        out.append(("vertex-face", points[k] - 0.5 * distance * n, sign * n[None], distance, facet_i, facet_j))
-    return out
+def _vertex_vertex(every: _Everything, search, reach, paired):
+    """Corners of two blocks within their search distances."""
+    points, block = every.corner_points, every.corner_block
+    hits = _near(points, np.zeros(len(points)), points, np.zeros(len(points)), reach)
+    a, b = hits.T if len(hits) else (np.zeros(0, int), np.zeros(0, int))
+    ok = (block[a] < block[b]) & paired(block[a], block[b])
+    a, b = a[ok], b[ok]
+    gap = np.linalg.norm(points[b] - points[a], axis=1)
+    ok = gap <= search[block[a]] + search[block[b]]
+    return [(int(block[x]), int(block[y]), "vertex-vertex", (points[x] + points[y]) / 2, None,
+             every.corner_rays[x], every.corner_rays[y], float(g), -1, -1)
+            for x, y, g in zip(a[ok], b[ok], gap[ok])]
 
 
-def _edge_edge(a: _Placed, b: _Placed, tol, angle):
-    """Convex feature edges of a and b crossing (not parallel) at interior points within ``tol``."""
-    if not len(a.edges) or not len(b.edges):
-        return []
-    pa, qa = a.vertices[a.edges[:, 0]], a.vertices[a.edges[:, 1]]
-    pb, qb = b.vertices[b.edges[:, 0]], b.vertices[b.edges[:, 1]]
-    ca, cb = (pa + qa) / 2, (pb + qb) / 2
-    ra, rb = np.linalg.norm(qa - pa, axis=1) / 2, np.linalg.norm(qb - pb, axis=1) / 2
-    hits = _near(ca, ra, cb, rb, tol)
+def _vertex_edge(every: _Everything, search, reach, paired):
+    """Corners of one block on the interior of a convex feature edge of another."""
+    points, block = every.corner_points, every.corner_block
+    hits = _near(every.mid, every.half, points, np.zeros(len(points)), reach)
     if not len(hits):
         return []
-    ea, eb = hits[:, 0], hits[:, 1]
-    u, w = qa[ea] - pa[ea], qb[eb] - pb[eb]
+    e, c = hits.T
+    ok = paired(every.edge_block[e], block[c])
+    e, c = e[ok], c[ok]
+    u = every.edge_q[e] - every.edge_p[e]
+    s = np.einsum("ki,ki->k", points[c] - every.edge_p[e], u) / np.einsum("ki,ki->k", u, u)
+    on = every.edge_p[e] + np.clip(s, 0, 1)[:, None] * u
+    gap = np.linalg.norm(points[c] - on, axis=1)
+    tol = search[every.edge_block[e]] + search[block[c]]
+    length = 2 * every.half[e]
+    # interior: farther than the tolerance from an end of the edge that is a corner
+    near_p = every.end_corner[e, 0] & (s * length <= tol)
+    near_q = every.end_corner[e, 1] & ((1 - s) * length <= tol)
+    ok = (s >= 0) & (s <= 1) & (gap <= tol) & ~near_p & ~near_q
+    out = []
+    for x, y, p, g in zip(e[ok], c[ok], on[ok], gap[ok]):
+        edge_block, corner_block = int(every.edge_block[x]), int(block[y])
+        point = (p + points[y]) / 2
+        if edge_block < corner_block:
+            out.append((edge_block, corner_block, "vertex-edge", point, None, every.edge_rays[x],
+                        every.corner_rays[y], float(g), -1, -1))
+        else:
+            out.append((corner_block, edge_block, "vertex-edge", point, None, every.corner_rays[y],
+                        every.edge_rays[x], float(g), -1, -1))
+    return out
+
+
+def _edge_edge(every: _Everything, search, reach, paired, angle):
+    """Convex feature edges of two blocks crossing (not parallel) at interior points."""
+    hits = _near(every.mid, every.half, every.mid, every.half, reach)
+    if not len(hits):
+        return []
+    a, b = hits.T
+    ok = (every.edge_block[a] < every.edge_block[b]) & paired(every.edge_block[a], every.edge_block[b])
+    a, b = a[ok], b[ok]
+    pa, pb = every.edge_p[a], every.edge_p[b]
+    u, w = every.edge_q[a] - pa, every.edge_q[b] - pb
     cross = np.cross(u, w)
-    length = np.linalg.norm(cross, axis=1)
-    lu, lw = np.linalg.norm(u, axis=1), np.linalg.norm(w, axis=1)
-    # not parallel: the lines part by more than the tolerance over the shorter edge
-    transverse = length > np.maximum(np.sin(angle), tol / np.minimum(lu, lw)) * lu * lw
+    size = np.linalg.norm(cross, axis=1)
+    lu, lw = 2 * every.half[a], 2 * every.half[b]
+    tol = search[every.edge_block[a]] + search[every.edge_block[b]]
+    # not parallel: over the shorter edge the lines part by more than the tolerance, and by more than the angle
+    transverse = size > np.maximum(np.sin(angle), tol / np.maximum(np.minimum(lu, lw), 1e-300)) * lu * lw
+    a, b, pa, pb, u, w, cross, size, lu, lw, tol = (x[transverse] for x in (a, b, pa, pb, u, w, cross, size, lu, lw,
+                                                                            tol))
+    d = pb - pa
+    uu, ww, uw = lu ** 2, lw ** 2, np.einsum("ki,ki->k", u, w)
+    du, dw = np.einsum("ki,ki->k", d, u), np.einsum("ki,ki->k", d, w)
+    det = uu * ww - uw ** 2
+    s = (du * ww - dw * uw) / det
+    t = (du * uw - dw * uu) / det
+    on_a, on_b = pa + s[:, None] * u, pb + t[:, None] * w
+    n = cross / size[:, None]
+    gap_signed = np.einsum("ki,ki->k", on_b - on_a, n)
+    near = ((every.end_corner[a, 0] & (s * lu <= tol)) | (every.end_corner[a, 1] & ((1 - s) * lu <= tol))
+            | (every.end_corner[b, 0] & (t * lw <= tol)) | (every.end_corner[b, 1] & ((1 - t) * lw <= tol)))
+    ok = (s >= 0) & (s <= 1) & (t >= 0) & (t <= 1) & (np.abs(gap_signed) <= tol) & ~near
     out = []
-    for k in np.flatnonzero(transverse):
-        x, y = ea[k], eb[k]
-        d = pb[y] - pa[x]
-        uu, ww, uw = u[k] @ u[k], w[k] @ w[k], u[k] @ w[k]
-        det = uu * ww - uw * uw
-        s = ((d @ u[k]) * ww - (d @ w[k]) * uw) / det
-        t = ((d @ u[k]) * uw - (d @ w[k]) * uu) / det
-        if not (0.0 <= s <= 1.0 and 0.0 <= t <= 1.0):
-            continue
-        on_a, on_b = pa[x] + s * u[k], pb[y] + t * w[k]
-        if np.linalg.norm(on_b - on_a) > tol:
-            continue
-        if _near_corner(a, a.edges[x], on_a, tol) or _near_corner(b, b.edges[y], on_b, tol):
-            continue  # at a corner: a vertex-edge or vertex-vertex touch
-        n = cross[k] / length[k]
-        if n @ a.edge_normals[x].sum(axis=0) < 0:
-            n = -n
-        # the plane of the two edges separates the two wedges: n in cone(a's normals), -n in cone(b's)
-        tol_angle = np.sin(angle)
-        if not (_in_cone(a.edge_normals[x], n, tol_angle) and _in_cone(b.edge_normals[y], -n, tol_angle)):
-            continue
-        out.append(("edge-edge", (on_a + on_b) / 2, n[None], float((on_b - on_a) @ n), -1, -1))
+    for k in np.flatnonzero(ok):
+        normal = n[k] if n[k] @ every.edge_rays[a[k], 2:].sum(axis=0) <= 0 else -n[k]
+        out.append((int(every.edge_block[a[k]]), int(every.edge_block[b[k]]), "edge-edge",
+                    (on_a[k] + on_b[k]) / 2, normal[None], every.edge_rays[a[k]], every.edge_rays[b[k]],
+                    float((on_b[k] - on_a[k]) @ normal), -1, -1))
     return out
 
 
-def _vertex_edge(a: _Placed, b: _Placed, tol, angle, sign):
-    """Corners of b on the interior of convex feature edges of a (``sign`` -1: a is block j)."""
-    if not len(a.edges) or not len(b.corners):
+def _vertex_face(table, every: _Everything, search, reach, paired, count, keys):
+    """Corners of one block strictly inside a facet of another (farther than the tolerance from its boundary)."""
+    points, block = every.corner_points, every.corner_block
+    blocks = np.unique(block)
+    facets = np.concatenate([np.arange(table.start[b], table.start[b + 1]) for b in blocks]).astype(int)
+    if not len(facets) or not len(points):
         return []
-    pa, qa = a.vertices[a.edges[:, 0]], a.vertices[a.edges[:, 1]]
-    ca, ra = (pa + qa) / 2, np.linalg.norm(qa - pa, axis=1) / 2
-    hits = _near(ca, ra, b.corner_points, np.zeros(len(b.corners)), tol)
-    out = []
-    for e, k in hits:
-        u = qa[e] - pa[e]
-        s = float((b.corner_points[k] - pa[e]) @ u / (u @ u))
-        if not 0.0 <= s <= 1.0:
-            continue
-        on_a = pa[e] + s * u
-        if np.linalg.norm(b.corner_points[k] - on_a) > tol or _near_corner(a, a.edges[e], on_a, tol):
-            continue
-        outward_a, outward_b = a.edge_normals[e], b.corner_normals[k]
-        if sign < 0:
-            outward_a, outward_b = outward_b, outward_a
-        cone = admissible_normals(outward_a, outward_b, angle)
-        if not len(cone):
-            continue
-        gap = float(np.linalg.norm(b.corner_points[k] - on_a))
-        out.append(("vertex-edge", (on_a + b.corner_points[k]) / 2, cone, gap, -1, -1))
-    return out
-
-
-def _vertex_vertex(a: _Placed, b: _Placed, tol, angle):
-    """Corners of a and b within ``tol`` of each other."""
-    if not len(a.corners) or not len(b.corners):
+    box = shapely.bounds(table.polygons[facets])
+    radius = np.hypot(np.maximum(np.abs(box[:, 0]), np.abs(box[:, 2])),
+                      np.maximum(np.abs(box[:, 1]), np.abs(box[:, 3])))
+    hits = _near(table.origins[facets], radius, points, np.zeros(len(points)), reach)
+    if not len(hits):
         return []
+    f, c = hits.T
+    g = facets[f]
+    face_block = table.block[g]
+    ok = paired(face_block, block[c])
+    g, c, face_block = g[ok], c[ok], face_block[ok]
+    offset = points[c] - table.origins[g]
+    distance = np.einsum("ki,ki->k", offset, table.normals[g])
+    tol = search[face_block] + search[block[c]]
+    ok = np.abs(distance) <= tol
+    g, c, face_block, offset, distance, tol = g[ok], c[ok], face_block[ok], offset[ok], distance[ok], tol[ok]
+    xy = shapely.points(np.einsum("ki,kai->ka", offset, table.bases[g]))
+    polygons = table.polygons[g]
+    inside = shapely.contains(polygons, xy) & (shapely.distance(shapely.boundary(polygons), xy) > tol)
     out = []
-    for k, m in _near(a.corner_points, np.zeros(len(a.corners)), b.corner_points, np.zeros(len(b.corners)), tol):
-        cone = admissible_normals(a.corner_normals[k], b.corner_normals[m], angle)
-        if not len(cone):
-            continue
-        gap = float(np.linalg.norm(b.corner_points[m] - a.corner_points[k]))
-        out.append(("vertex-vertex", (a.corner_points[k] + b.corner_points[m]) / 2, cone, gap, -1, -1))
+    for k in np.flatnonzero(inside):
+        n = table.normals[g[k]]
+        point = points[c[k]] - 0.5 * distance[k] * n
+        corner_block, fb, local = int(block[c[k]]), int(face_block[k]), int(table.local[g[k]])
+        u, v = table.bases[g[k]]
+        face_rays = np.array([u, -u, v, -v, -n])  # the half-space below the face
+        if fb < corner_block:  # the face is block i's, pointing to j
+            out.append((fb, corner_block, "vertex-face", point, n[None], face_rays, every.corner_rays[c[k]],
+                        float(distance[k]), local, -1))
+        else:
+            out.append((corner_block, fb, "vertex-face", point, -n[None], every.corner_rays[c[k]], face_rays,
+                        float(distance[k]), -1, local))
     return out
 
 
-def _near_corner(placed: _Placed, edge, point, tol) -> bool:
-    """Whether ``point`` on ``edge`` lies within ``tol`` of an end of the edge that is a corner."""
-    return any(placed.is_corner[v] and np.linalg.norm(placed.vertices[v] - point) <= tol for v in edge)
+def _unimplied(found, faces, search):
+    """The touches of ``found`` that lie farther than their tolerance from every face contact of their pair."""
+    by_pair = {}
+    for k, c in enumerate(faces):
+        by_pair.setdefault((c.i, c.j), []).append(k)
+    tests_t, tests_f = [], []
+    for t, item in enumerate(found):
+        for k in by_pair.get((item[0], item[1]), ()):
+            tests_t.append(t)
+            tests_f.append(k)
+    if not tests_t:
+        return found
+    tests_t, tests_f = np.array(tests_t), np.array(tests_f)
+    points = np.array([item[3] for item in found])[tests_t]
+    tol = np.array([search[item[0]] + search[item[1]] for item in found])[tests_t]
+    origins = np.array([faces[k].origin for k in tests_f])
+    normals = np.array([faces[k].normal for k in tests_f])
+    bases = np.array([faces[k].basis for k in tests_f])
+    polygons = np.array([faces[k].polygon for k in tests_f], dtype=object)
+    offset = points - origins
+    xy = shapely.points(np.einsum("ki,kai->ka", offset, bases))
+    near = (np.abs(np.einsum("ki,ki->k", offset, normals)) <= tol) & (shapely.distance(polygons, xy) <= tol)
+    implied = np.zeros(len(found), dtype=bool)
+    implied[tests_t[near]] = True
+    return [item for item, gone in zip(found, implied) if not gone]
 
 
-def _contact(i, j, kind, point, normals, gap, facet_i, facet_j, rounding, coincide) -> Contact:
+def _separates(normal, rays_i, rays_j, angle) -> bool:
+    """Whether ``normal`` (from i to j) is admissible: ``n . d <= 0`` on i's rays and ``>= 0`` on j's (within angle)."""
+    tol = np.sin(angle)
+    return bool(np.all(np.asarray(rays_i) @ normal <= tol) and np.all(np.asarray(rays_j) @ normal >= -tol))
+
+
+def _distinct(rays, tol: float = 1e-9) -> np.ndarray:
+    """The rows of ``rays`` without repeats (within ``tol``; the first of each)."""
+    rays = np.asarray(rays, dtype=float).reshape(-1, 3)
+    close = np.linalg.norm(rays[:, None] - rays[None], axis=2) <= tol
+    return rays[~np.triu(close, 1).any(axis=0)]
+
+
+def _cross(a, b) -> np.ndarray:
+    """Row-wise cross products (numpy's cross costs more than the products for a few rows)."""
+    return np.column_stack([a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1], a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2],
+                            a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]])
+
+
+#: Index pairs of the upper triangle for up to 31 rows (the planes of a cone of admissible normals).
+_PAIRS = [np.triu_indices(k, 1) for k in range(32)]
+
+
+def _contact(i, j, kind, point, normals, gap, facet_i, facet_j, normal, basis, rounding, coincide) -> Contact:
     """A point contact of blocks i < j at ``point`` (one admissible normal, or a cone of them)."""
     normals = np.asarray(normals, dtype=float).reshape(-1, 3)
-    normal = normals.sum(axis=0)
-    normal = normal / np.linalg.norm(normal)
     vertices = np.asarray(point, dtype=float).reshape(1, 3).copy()
     origin = vertices[0].copy()
-    basis = plane_bases(normal[None])[0]
     cone = None if len(normals) == 1 else normals.copy()
     for array in (normal, vertices, origin, basis) + (() if cone is None else (cone,)):
         array.setflags(write=False)
@@ -423,19 +528,18 @@ def _near(centres_a, radii_a, centres_b, radii_b, tol) -> np.ndarray:
     if not len(centres_a) or not len(centres_b):
         return np.zeros((0, 2), dtype=int)
     classes_a, classes_b = _size_classes(radii_a), _size_classes(radii_b)
+    trees_b = [cKDTree(centres_b[members]) for members in classes_b]
     out = []
     for members_a in classes_a:
         tree = cKDTree(centres_a[members_a])
         top_a = float(radii_a[members_a].max())
-        for members_b in classes_b:
+        for members_b, tree_b in zip(classes_b, trees_b):
             reach = top_a + float(radii_b[members_b].max()) + tol
-            hits = tree.query_ball_point(centres_b[members_b], reach)
-            sizes = np.fromiter(map(len, hits), dtype=int, count=len(hits))
-            if not sizes.sum():
+            hits = tree.sparse_distance_matrix(tree_b, reach, output_type="ndarray")
+            if not len(hits):
                 continue
-            ia = members_a[np.concatenate([h for h in hits if h]).astype(int)]
-            ib = np.repeat(members_b, sizes)
-            close = (np.linalg.norm(centres_a[ia] - centres_b[ib], axis=1) <= radii_a[ia] + radii_b[ib] + tol)
+            ia, ib = members_a[hits["i"]], members_b[hits["j"]]
+            close = hits["v"] <= radii_a[ia] + radii_b[ib] + tol
             out.append(np.column_stack([ia[close], ib[close]]))
     return np.vstack(out) if out else np.zeros((0, 2), dtype=int)
 
@@ -445,23 +549,6 @@ def _size_classes(radii) -> list:
     radii = np.asarray(radii, dtype=float)
     level = np.where(radii > 0, np.floor(np.log(np.maximum(radii, 1e-300)) / np.log(4.0)), -np.inf)
     return [np.flatnonzero(level == v) for v in np.unique(level)]
-
-
-def _face_planes(generators: np.ndarray) -> np.ndarray:
-    """Normals of the planes through pairs of generators (the 2D faces a cone's boundary may lie in)."""
-    if len(generators) < 2:
-        return np.zeros((0, 3))
-    k = len(generators)
-    a, b = np.triu_indices(k, 1)
-    planes = np.cross(generators[a], generators[b])
-    return planes[np.linalg.norm(planes, axis=1) > 1e-12]
-
-
-def _in_cone(generators, ray, tol: float) -> bool:
-    """Whether the unit ``ray`` lies in the cone of ``generators`` within ``tol`` (a residual, about an angle)."""
-    generators = np.asarray(generators, dtype=float).reshape(-1, 3)
-    _, residual = nnls(generators.T, np.asarray(ray, dtype=float))
-    return residual <= tol
 
 
 def _unit(vectors: np.ndarray) -> np.ndarray:
