@@ -30,10 +30,11 @@ from interlock.verify.precision import PRECISION_FACTOR, Precision, block_precis
 from interlock.verify.matrix import InterlockingMatrix, interlocking_matrix
 from interlock.verify.validate import refuse_overlaps_without_contact, validate as check_overlaps
 
-__all__ = ["Verdict", "check", "beyond_first_order", "block_noise", "opening_motion", "contact_tolerances", "FARKAS_CLOSED_RTOLS",
-           "PROJECTION_ROUNDS", "STAGES", "RANK_RTOL", "RANK_CLEAR_RTOL", "GRAM_RESOLUTION", "GRAM_SURE_RTOL", "LP_TOL",
-           "LP_SOLVERS", "MOVING_RTOL", "DENSE_COLUMNS", "FIRST_KERNEL_PROBE", "COARSE_RATIO", "NOISE_CONTACTS", "SOLVER_THREADS",
-           "MAX_KERNEL_PROBE", "INVERSE_ITERATIONS"]
+__all__ = ["Verdict", "check", "beyond_first_order", "block_noise", "opening_motion", "contact_tolerances",
+           "FARKAS_CLOSED_RTOLS", "PROJECTION_ROUNDS", "STAGES", "RANK_RTOL", "RANK_CLEAR_RTOL", "GRAM_RESOLUTION",
+           "GRAM_SURE_RTOL", "LP_TOL", "LP_SOLVERS", "MOVING_RTOL", "DENSE_COLUMNS", "FIRST_KERNEL_PROBE",
+           "COARSE_RATIO", "NOISE_CONTACTS", "NOISE_SPREAD", "SOLVER_THREADS", "MAX_KERNEL_PROBE",
+           "INVERSE_ITERATIONS"]
 
 #: A singular value at most ``RANK_RTOL * sigma_max`` is zero ...
 RANK_RTOL = 1e-9
@@ -49,6 +50,9 @@ COARSE_RATIO = 0.01
 #: A block's noise is read (:func:`block_noise`) from at least this many contacts: the median of fewer would
 #: take a designed fold of one face for noise.
 NOISE_CONTACTS = 3
+#: A bend up to this many times the sum of its blocks' median noise is noise: single bends spread about the median
+#: (the TopoLite cube with Gaussian vertex noise: a bend of 4.3e-9 between blocks of median 2.4e-9 and 1.6e-9).
+NOISE_SPREAD = 2.0
 
 
 @dataclass(frozen=True)
@@ -299,7 +303,8 @@ def _decide(assembly, frame, translational, certify, rank_rtol, lp_tol, contacts
     with _stage(timings, "matrix", progress, budget):
         A = interlocking_matrix(assembly, frame, translational, contacts=found)
     fixed = tuple(sorted(set(range(len(assembly))) - set(A.free.tolist())))
-    tolerances = {"rank_rtol": rank_rtol, "rank_clear_rtol": RANK_CLEAR_RTOL, "lp_tol": lp_tol, "moving_rtol": MOVING_RTOL,
+    tolerances = {"rank_rtol": rank_rtol, "rank_clear_rtol": RANK_CLEAR_RTOL, "lp_tol": lp_tol,
+                  "moving_rtol": MOVING_RTOL,
                   "length_scale": A.length_scale}
     if math.isfinite(budget.limit):
         tolerances["time_limit"] = budget.limit
@@ -370,9 +375,13 @@ def _decide(assembly, frame, translational, certify, rank_rtol, lp_tol, contacts
         verdict = Verdict(True, f"positive self-stress on all {A.shape[0]} rows and full column rank",
                           rank=rank, lp_value=0.0, stress=stress, **base)
     else:
-        why = "the rank is within the tolerance band" if not rank_clear else "the LPs found neither a stress nor a motion"
+        why = ("the rank is within the tolerance band" if not rank_clear
+               else "the LPs found neither a stress nor a motion")
         if lp_value is None and stress is None and tolerances.get("motion_from") == "lp":
-            why = f"the LPs found neither a stress nor a motion (solver: {tolerances.get('lp_status', 'failed')})"
+            status = tolerances.get("lp_status", "failed")
+            how = ("its point could not be made an exact motion, nor one within tolerance"
+                   if status in ("Solved", "AlmostSolved") else "no point")
+            why = f"the LPs found neither a stress nor a motion (solver: Clarabel {status}; {how})"
         verdict = Verdict(None, f"floating point is not conclusive: {why}", rank=rank, lp_value=lp_value,
                           stress=stress, **base)
     if verdict.interlocked is True:
@@ -542,16 +551,17 @@ def contact_tolerances(found, precision: Precision, tolerance=None, bends: bool 
     rounding of its two blocks, plus twice the bend of faces bent within the
     tolerances), or, for contacts given by hand, the rounding of its blocks
     (:meth:`~interlock.verify.precision.Precision.contact_tolerance`); and at
-    least the mean of its two blocks' largest such tolerance (a noisy mesh
-    shows its noise only on faces of several triangles).
+    least :data:`NOISE_SPREAD` times the sum of its blocks' noise
+    (:func:`block_noise`: a noisy mesh shows its noise only on faces of
+    several triangles).
     ``bends=False``: the rounding alone (what the numbers show, without the allowance for computed geometry:
     :meth:`~interlock.verify.precision.Precision.contact_tolerance`).
     """
     if tolerance is not None:
         return np.full(len(found), float(tolerance))
     rounding = np.array([precision.contact_tolerance(c.i, c.j) for c in found], dtype=float)
-    if len(found):  # vertex noise of either block moves the contact: the sum of the blocks' noise
-        noise = block_noise(found)
+    if len(found):  # vertex noise of either block moves the contact: the sum of the blocks' noise, and its spread
+        noise = NOISE_SPREAD * block_noise(found)
         rounding = np.maximum(rounding, np.array([noise[c.i] + noise[c.j] for c in found]))
     if not bends:
         return rounding

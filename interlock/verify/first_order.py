@@ -17,7 +17,8 @@ import scipy.sparse.linalg
 
 from interlock.verify.budget import Budget
 
-__all__ = ["matrix_rank", "positive_stress", "opening_motion", "motion_lp", "interior_motion", "clarabel_settings", "LP_TOL",
+__all__ = ["matrix_rank", "positive_stress", "opening_motion", "motion_lp", "interior_motion", "clarabel_settings",
+           "LP_TOL",
            "RANK_CLEAR_RTOL", "GRAM_RESOLUTION", "GRAM_SURE_RTOL", "FARKAS_CLOSED_RTOLS", "PROJECTION_ROUNDS",
            "DENSE_COLUMNS", "MAX_KERNEL_PROBE", "SOLVER_THREADS", "FIRST_KERNEL_PROBE", "INVERSE_ITERATIONS"]
 
