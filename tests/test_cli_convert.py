@@ -36,7 +36,7 @@ def test_fixed_replaces_the_stored_frame(hexagon_file, tmp_path):
     assert read(tmp_path / "h.3dm").frame == (0, 1, 2)
 
 
-@pytest.mark.parametrize("target, message", [("h.xyz", "choose a suffix"), ("SAME", "the same file")])
+@pytest.mark.parametrize("target, message", [("h.xyz", "unknown format .xyz"), ("SAME", "the same file")])
 def test_bad_targets_are_one_line_errors(hexagon_file, tmp_path, capsys, target, message):
     _, source = hexagon_file
     target = str(source) if target == "SAME" else str(tmp_path / target)
@@ -55,11 +55,11 @@ def test_a_file_that_is_not_a_3dm_is_a_one_line_error(tmp_path, capsys):
 @pytest.mark.parametrize("suffix", [".3dm", ".json"])
 def test_slow_formats_report_progress_per_block(hexagon_file, tmp_path, suffix):
     hexagon, _ = hexagon_file
-    written, read = [], []
+    written, seen = [], []
     path = export(hexagon, tmp_path / f"h{suffix}", progress=lambda done, total: written.append((done, total)))
-    read(path, progress=lambda done, total: read.append((done, total)))
+    read(path, progress=lambda done, total: seen.append((done, total)))
     assert written == [(k, len(hexagon)) for k in range(len(hexagon))]
-    assert read == [(k, len(hexagon)) for k in range(len(hexagon))]
+    assert seen == [(k, len(hexagon)) for k in range(len(hexagon))]
 
 
 def test_labels_survive_every_labelled_format_and_the_others_say_they_drop_them(hexagon_file, tmp_path, capsys):

@@ -448,3 +448,8 @@ def _checked_lattice(lattice) -> np.ndarray:
         raise AssemblyError("the two lattice vectors of a periodic cell must be linearly independent")
     lattice.setflags(write=False)
     return lattice
+
+
+# Deprecated: the markers of interlock's files live with the formats (interlock.formats.common); removed in 0.3.
+__getattr__ = deprecation.moved(__name__, dict.fromkeys(["HEADER_MARKER", "STL_RECORD", "BLOCK_DATA"],
+                                                        "interlock.formats.common"))

@@ -65,10 +65,9 @@ def sized(assembly, args):
 def run(args) -> int:
     from pathlib import Path
 
-    from interlock.formats import LABELLED_FORMATS, write
+    from interlock.formats import LABELLED_FORMATS, writable_target, write
 
-    if Path(args.target).suffix.lower() not in OUTPUT_SUFFIXES:
-        raise InterlockError(f"cannot write {args.target}: choose a suffix from {', '.join(OUTPUT_SUFFIXES)}")
+    writable_target(args.target)  # before reading: a folder, a device, an unknown suffix are said at once
     if _same_file(args.source, args.target):
         raise InterlockError(f"IN and OUT are the same file ({args.source}); write to another name")
     from tqdm import tqdm

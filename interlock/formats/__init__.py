@@ -22,13 +22,13 @@ keeps: ``docs/formats.md``.  Each name is imported on first use (:func:`interloc
 
 from interlock import lazy_exports
 
-__all__ = ["read", "write", "read_mesh_file", "FORMATS", "READ_FORMATS", "LABELLED_FORMATS", "UP_CONVENTIONS",
-           "FormatError", "MeshFile", "UNITS", "converted", "scaled", "unit_name"]
+__all__ = ["read", "write", "read_mesh_file", "writable_target", "FORMATS", "READ_FORMATS", "LABELLED_FORMATS",
+           "UP_CONVENTIONS", "FormatError", "MeshFile", "UNITS", "converted", "scaled", "unit_name"]
 
 # where each exported name lives
 _HOMES = {
-    **dict.fromkeys(["read", "write", "read_mesh_file", "FORMATS", "READ_FORMATS", "LABELLED_FORMATS",
-                     "UP_CONVENTIONS"], "interlock.formats.readwrite"),
+    **dict.fromkeys(["read", "write", "read_mesh_file", "writable_target", "FORMATS", "READ_FORMATS",
+                     "LABELLED_FORMATS", "UP_CONVENTIONS"], "interlock.formats.readwrite"),
     **dict.fromkeys(["FormatError", "MeshFile"], "interlock.formats.common"),
     **dict.fromkeys(["UNITS", "converted", "scaled", "unit_name"], "interlock.formats.units"),
 }

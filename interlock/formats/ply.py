@@ -101,14 +101,17 @@ def check_ascii_counts(path: Path, file, header: bytes) -> None:
     if len(lines) < announced:
         held, rest = [], len(lines)
         for name, count in elements:
-            held.append(f"{min(count, rest):,} of {count:,} {name}{'s' if count != 1 else ''}")
+            held.append(f"{min(count, rest):,} of {count:,} {_plural(name, count)}")
             rest = max(rest - count, 0)
         raise FormatError(f"{path} is cut short: its header announces " + ", ".join(
-            f"{count:,} {name}{'s' if count != 1 else ''}" for name, count in elements) + "; it holds "
-            + ", ".join(held))
+            f"{count:,} {_plural(name, count)}" for name, count in elements) + "; it holds " + ", ".join(held))
     if len(lines) > announced:
         raise FormatError(f"{path} holds {len(lines) - announced:,} lines more than its header announces "
                           f"({announced:,} element lines); the header or the data is damaged")
+
+
+def _plural(name: str, count: int) -> str:
+    return name if count == 1 else {"vertex": "vertices"}.get(name, name + "s")
 
 
 def _per_face(path: Path, raw: dict, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:

@@ -21,7 +21,7 @@ from interlock.formats.common import GLTF_TO_Z_UP, FormatError, MeshFile, as_ass
 from interlock.formats.scene import quiet_trimesh, read_scene
 from interlock.formats.units import converted, turned, unit_name, up_axis
 
-__all__ = ["read", "write", "read_mesh_file", "FORMATS", "READ_FORMATS", "LABELLED_FORMATS", "UP_CONVENTIONS",
+__all__ = ["read", "write", "read_mesh_file", "writable_target", "FORMATS", "READ_FORMATS", "LABELLED_FORMATS", "UP_CONVENTIONS",
            "MAX_COORDINATE"]
 
 #: The formats :func:`write` writes, by suffix, and how each keeps the blocks apart, the frame and the unit
@@ -169,7 +169,7 @@ def write(obj, path, *, unit=None, up=None, progress=None) -> Path:
     >>> bool(np.allclose(back.bounds, grid.bounds)), back.info["frame_from"]
     (True, 'file')
     """
-    path = _target(path)
+    path = writable_target(path)
     suffix = path.suffix.lower()
     assembly = as_assembly(obj)
     if not len(assembly):
@@ -239,7 +239,7 @@ def _read(paths, frame, up, progress) -> Assembly:
                 assembly.info["frame_from"] = assembly.info["supports_from"]
             _check_coordinates(paths, assembly.meshes)
             return assembly
-        found = _mesh_file(paths, True, up)
+        found = _mesh_file(_mesh_path(paths), True, up)
         labels = [found.labels.get(name, f"{paths.name}:{name}") for name in found.names]
         stored, sources, kept = found.frame, [str(paths)], restored(found.info or {})
         kept.pop("unit", None)
@@ -293,7 +293,7 @@ def _mesh_file(path: Path, split: bool, up) -> MeshFile:
                           f"it holds {len(found.meshes)}")
     if not split and len(found.meshes) > 1 and found.announced is not None:
         raise FormatError(f"{path} holds {len(found.meshes)} blocks, which would merge into one in a list of "
-                          f"one file per block; read it on its own: interlock.read({str(path)!r})")
+                          f"one file per block; load it on its own: interlock.read({str(path)!r})")
     if split and found.announced is None and len(found.meshes) == 1:
         found = split_bodies(path, found)
     turn = up if up is not None and suffix not in UP_CONVENTIONS else found.up
@@ -311,12 +311,12 @@ def _check_coordinates(path: Path, meshes) -> None:
         vertices = np.asarray(mesh.vertices)
         bad = ~np.isfinite(vertices) | (np.abs(np.nan_to_num(vertices)) > MAX_COORDINATE)
         if bad.any():
-            value = vertices[bad][0]
+            value = float(vertices[bad][0])
             what = "not a finite number" if not np.isfinite(value) else (
                 f"beyond {MAX_COORDINATE:g}, where volumes and normals overflow double precision; scale the model "
                 "down (interlock convert --scale, or another --unit)")
             where = f"block {k} of {path}" if len(meshes) > 1 else str(path)
-            raise FormatError(f"{where} has a vertex coordinate {value!r} that is {what}")
+            raise FormatError(f"{where} has a vertex coordinate {value:g} that is {what}")
 
 
 def _mesh_path(path) -> Path:
@@ -355,8 +355,9 @@ def _paths(paths):
 
 
 # --- writing ----------------------------------------------------------------------------------------
-def _target(path) -> Path:
-    """``path`` checked as a file to write: a known suffix, a folder that exists and is writable."""
+def writable_target(path) -> Path:
+    """``path`` checked as a file :func:`write` can write: not a folder or device, a known suffix, in a folder that
+    exists and is writable; a :class:`FormatError` saying what is wrong otherwise."""
     if not isinstance(path, (str, os.PathLike)):
         raise FormatError(f"path must be a file name or path, got {type(path).__name__}")
     path = Path(path)
@@ -372,9 +373,7 @@ def _target(path) -> Path:
         raise FormatError(f"cannot write {path}: it is not a regular file (a device, pipe or socket); give a file "
                           f"name ending in one of {supported}")
     if suffix not in FORMATS:
-        said = f"the suffix {path.suffix}" if path.suffix else "no suffix"
-        raise FormatError(f"cannot write {path}: its name has {said}, which names no format; give a name ending "
-                          f"in one of {supported}")
+        raise FormatError(f"cannot write {path}: unknown format {suffix or '(no suffix)'}; use one of {supported}")
     problem = unwritable(path, hint=f"ending in one of {supported}")
     if problem:
         raise FormatError(f"cannot write {path}: {problem}")

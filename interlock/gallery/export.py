@@ -9,6 +9,7 @@ from pathlib import Path
 
 from interlock import deprecation
 from interlock.formats import write
+from interlock.formats.common import exploded_factor
 from interlock.gallery import appearance
 
 __all__ = ["export"]
@@ -24,8 +25,9 @@ def export(obj, path, exploded=0.0, progress=None) -> Path:
     if not caller.startswith("interlock."):
         warnings.warn("interlock.gallery.export moved to interlock.write (interlock.formats.write); the old path is "
                       f"removed in interlock {deprecation.REMOVED_IN}", DeprecationWarning, stacklevel=2)
+    factor = exploded_factor(exploded)
     assembly = appearance.as_assembly(obj)
-    return write(appearance.exploded(assembly, exploded) if exploded else assembly, path, progress=progress)
+    return write(appearance.exploded(assembly, factor) if factor else assembly, path, progress=progress)
 
 
 __getattr__ = deprecation.moved(__name__, {

@@ -56,7 +56,7 @@ def test_objects_are_named_and_layered_by_class_with_a_frame_layer(tmp_path, ass
     assembly = assemblies["p4"]
     model = rhino3dm.File3dm.Read(str(write_3dm(assembly, tmp_path / "p4.3dm")))
     layers = [model.Layers[k].Name for k in range(len(model.Layers))]
-    assert layers == ["coset 0", "coset 1", "coset 2", "coset 3", FRAME_LAYER]
+    assert layers == ["coset_0", "coset_1", "coset_2", "coset_3", FRAME_LAYER]
     classes, _ = block_classes(assembly)
     for i in range(len(assembly)):
         item = model.Objects[i]
@@ -64,7 +64,7 @@ def test_objects_are_named_and_layered_by_class_with_a_frame_layer(tmp_path, ass
         assert item.Attributes.Name == f"block_{i:04d} {assembly.labels[i]}"
         assert isinstance(item.Geometry, rhino3dm.Mesh) and item.Geometry.IsClosed
         layer = layers[item.Attributes.LayerIndex]
-        assert layer == (FRAME_LAYER if i in assembly.frame else f"coset {classes[i]}")
+        assert layer == (FRAME_LAYER if i in assembly.frame else f"coset_{classes[i]}")
         assert strings["element"] == str(assembly.labels[i]) and strings["class"] == str(classes[i])
         assert strings["coset"] in {"x,y", "-y,x", "-x,-y", "y,-x"}
         assert strings["fixed"] == str(i in assembly.frame).lower()
@@ -258,7 +258,7 @@ def test_write_replaces_atomically_and_checks_its_input(tmp_path):
 def test_given_classes_name_the_layers(tmp_path):
     grid = presets.cube_grid()
     model = rhino3dm.File3dm.Read(str(write_3dm(grid, tmp_path / "g.3dm", classes=(np.arange(9) % 2, "parity"))))
-    assert [model.Layers[k].Name for k in range(len(model.Layers))] == ["parity 0", "parity 1", FRAME_LAYER]
+    assert [model.Layers[k].Name for k in range(len(model.Layers))] == ["parity_0", "parity_1", FRAME_LAYER]
 
 
 def test_missing_rhino3dm_says_how_to_install(tmp_path, monkeypatch):
