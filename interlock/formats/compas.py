@@ -183,7 +183,7 @@ def write_compas(assembly, path, progress=None) -> Path:
       coplanar triangles that meet along edges are merged into one polygon face
       (so interfaces come out as whole polygons), vertices written exactly;
     - ``is_support``: whether the block is in the frame;
-    - ``name`` (``block_0007``, by block index), ``label`` and ``label_type``
+    - ``name`` (the designer's, ``info["names"]``, else ``block_0007`` by block index), ``label`` and ``label_type``
       (the label as text and its kind, :func:`~interlock.blocks.labels.label_text`;
       :func:`read_compas` rebuilds the label from them unless the text is the
       node key's) and ``x, y, z`` (the block's centroid).
@@ -223,6 +223,10 @@ def write_compas(assembly, path, progress=None) -> Path:
         raise FormatError(f"nothing to write to {path.name}: the assembly has no blocks")
     fixed = set(assembly.frame)
     keys = _node_keys(assembly)
+    names = assembly.info.get("names")  # the designer's names (read from a .3dm or a COMPAS file)
+    if not (isinstance(names, (list, tuple)) and len(names) == len(assembly)):
+        names = [None] * len(assembly)
+    names = [name if isinstance(name, str) and name else None for name in names]
     nodes = {}
     for i, key in enumerate(keys):
         if progress is not None:
@@ -232,7 +236,8 @@ def write_compas(assembly, path, progress=None) -> Path:
         kind, text = label_text(assembly.labels[i])
         nodes[str(key)] = {"block": {"dtype": BLOCK_DTYPE, "data": _mesh_data(mesh, i, key),
                                      "guid": str(uuid.uuid5(uuid.NAMESPACE_OID, f"interlock block {i}"))},
-                           "is_support": i in fixed, "name": f"block_{i:04d}", "label": text, "label_type": kind,
+                           "is_support": i in fixed, "name": names[i] or f"block_{i:04d}", "label": text,
+                           "label_type": kind,
                            "x": x, "y": y, "z": z}
     graph = {"attributes": {}, "default_node_attributes": _NODE_DEFAULTS,
              "default_edge_attributes": {"interfaces": None}, "node": nodes, "edge": {key: {} for key in nodes},
