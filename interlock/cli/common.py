@@ -72,6 +72,23 @@ def whole_number(text: str) -> int:
     return int(digits)
 
 
+def length(text: str) -> float:
+    """An argparse ``type`` for a length (``--height``): a finite number of size at most the largest cell length
+    (``interlock.wallpaper.lattice.LENGTH_RANGE``, 1e30), so that no volume made from it overflows; its sign is
+    for the library to judge.
+
+    >>> length("0.5")
+    0.5
+    """
+    from interlock.wallpaper.lattice import LENGTH_RANGE
+
+    value = real_number(text)
+    if not abs(value) <= LENGTH_RANGE[1]:  # nan too
+        raise argparse.ArgumentTypeError(f"a length must be a finite number of size at most {LENGTH_RANGE[1]:g}, "
+                                         f"got {text}")
+    return value
+
+
 def exploded_factor(text: str) -> float:
     """An argparse ``type`` for ``--exploded``: a number 0..:data:`LARGEST_EXPLODED`."""
     value = real_number(text)

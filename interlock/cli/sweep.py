@@ -102,10 +102,13 @@ def run(args) -> int:
 
 
 def _check_address(address: str) -> None:
-    """Refuse what is plainly no scheduler address before Dask tries it (an empty one, a port beyond 65535)."""
+    """Refuse what is plainly no scheduler address before Dask tries it for its 10 s: an empty one, one with
+    spaces, a port outside 1-65535."""
     from interlock.sweep import SweepError
 
     port = address.rpartition(":")[2].rstrip("/")
-    if not address.strip() or (port.isascii() and port.isdigit() and not 0 < int(port) < 65536):
+    number = port.lstrip("+-")
+    out_of_range = number.isascii() and number.isdigit() and not 0 < int(port) < 65536
+    if not address.strip() or any(c.isspace() for c in address) or out_of_range:
         raise SweepError(f"--scheduler {address!r} is not a Dask scheduler address; give one such as "
                          "tcp://10.0.0.5:8786 (ports 1-65535)")
