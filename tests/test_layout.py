@@ -155,8 +155,8 @@ def test_the_old_ways_in_and_out_warn_and_forward(call, tmp_path):
     grid = presets.cube_grid()
     suffix = {"interlock.blocks.load_compas": ".json", "interlock.blocks.load_3dm": ".3dm"}.get(call, ".obj")
     path = interlock.write(grid, tmp_path / f"grid{suffix}")
-    old = {"Assembly.load": interlock.blocks.Assembly.load, "interlock.blocks.load_compas": interlock.blocks.load_compas,
-           "interlock.blocks.load_3dm": interlock.blocks.load_3dm,
+    old = {"Assembly.load": interlock.blocks.Assembly.load,
+           "interlock.blocks.load_compas": interlock.blocks.load_compas, "interlock.blocks.load_3dm": interlock.blocks.load_3dm,
            "interlock.gallery.export": lambda p: interlock.gallery.export(grid, p)}[call]
     with pytest.warns(DeprecationWarning, match=f"{call} moved to .*interlock.formats.*removed in interlock 0.3"):
         result = old(path)

@@ -1,7 +1,7 @@
 """``Assembly.info`` in files: plain values on the way out, the same values on the way back.
 
-The COMPAS JSON writer (:mod:`~interlock.blocks.compas`) and the Rhino writer
-(:mod:`~interlock.blocks.rhino`, a Python literal) store ``info`` as text, so
+The writers of :mod:`interlock.formats` (COMPAS JSON, OBJ, PLY, GLB and 3MF as JSON; Rhino ``.3dm`` as a
+Python literal) store ``info`` as text, so
 :func:`plain` turns every value into numbers, text, lists and dicts: numpy
 arrays and scalars become lists and numbers, infinities and NaN become text
 (neither JSON nor a literal holds them), and the contacts an assembly carries

@@ -3,8 +3,8 @@
 An :class:`~interlock.blocks.Assembly` labels its blocks with group elements
 (Escher blocks), lozenges (RhomBlocks), integer tuples (lattice cells), tuples
 such as ``("voussoir", 3)`` (arches), integers or text.  Files hold text, so
-every writer that keeps labels (Rhino ``.3dm`` user strings, COMPAS JSON node
-attributes, OBJ comments, GLB scene extras, 3MF metadata) stores the pair
+every writer of :mod:`interlock.formats` that keeps labels (Rhino ``.3dm`` user strings, COMPAS JSON node
+attributes, OBJ comments, GLB node and scene extras, 3MF metadata) stores the pair
 ``(kind, text)`` of :func:`label_text`, and the readers rebuild the label with
 :func:`label_from_text`:
 

@@ -21,7 +21,8 @@ from interlock.blocks.labels import label_from_text, label_text
 from interlock.files import unwritable, write_atomically
 from interlock.formats.common import MAX_NESTING, FormatError, json_value, nesting
 
-__all__ = ["read_compas", "load_compas", "write_compas", "read_json_document", "fingerprint", "UPSTREAM_SUPPORTS", "UPSTREAM_FINGERPRINTS",
+__all__ = ["read_compas", "load_compas", "write_compas", "read_json_document", "fingerprint", "UPSTREAM_SUPPORTS",
+           "UPSTREAM_FINGERPRINTS",
            "FINGERPRINT_ROUNDING", "COMPAS_DTYPES", "BLOCK_DTYPE", "GRAPH_DTYPE", "INFO_ATTRIBUTE"]
 
 #: Node keys that the upstream compas_cra examples fix, by file stem, for the sample files that mark no
@@ -354,7 +355,7 @@ def read_json_document(path, what: str = "JSON file"):
     >>> read_json_document(path)
     Traceback (most recent call last):
     ...
-    interlock.formats.common.FormatError: ... nests brackets 200000 deep; JSON files of assemblies nest about 10 deep (at most 200 are read)
+    interlock.formats.common.FormatError: ... nests brackets 200000 deep; JSON files of assemblies nest about 10 ...
     """
     path = Path(path)
     if not path.is_file():

@@ -21,7 +21,8 @@ from interlock.formats.common import GLTF_TO_Z_UP, FormatError, MeshFile, as_ass
 from interlock.formats.scene import quiet_trimesh, read_scene
 from interlock.formats.units import converted, turned, unit_name, up_axis
 
-__all__ = ["read", "write", "read_mesh_file", "writable_target", "FORMATS", "READ_FORMATS", "LABELLED_FORMATS", "UP_CONVENTIONS",
+__all__ = ["read", "write", "read_mesh_file", "writable_target", "FORMATS", "READ_FORMATS", "LABELLED_FORMATS",
+           "UP_CONVENTIONS",
            "MAX_COORDINATE"]
 
 #: The formats :func:`write` writes, by suffix, and how each keeps the blocks apart, the frame and the unit
@@ -329,7 +330,7 @@ def _mesh_path(path) -> Path:
             raise FormatError(f"{path} is a symbolic link that leads nowhere (to a missing file, or round a loop "
                               "of links); give the file itself")
         if path.is_dir():
-            raise FormatError(f"{path} is a folder, not a file; give the files in it, e.g. {path}/*.obj")
+            raise FormatError(f"{path} is a folder, not a mesh file; give the files in it, e.g. {path}/*.obj")
         if not path.exists():
             raise FormatError(f"file {path} does not exist")
         if not path.is_file():
@@ -390,8 +391,9 @@ def _file_up(suffix: str, up) -> str:
 
 
 def _convention(suffix: str, up: str) -> str:
+    free = ", ".join(s for s in READ_FORMATS if s not in UP_CONVENTIONS)
     return (f"{suffix} files are +{UP_CONVENTIONS[suffix].upper()} up by their format's convention, so up={up!r} "
-            f"cannot be chosen for them; up='y' or 'z' is for {', '.join(s for s in READ_FORMATS if s not in UP_CONVENTIONS)}")
+            f"cannot be chosen for them; up='y' or 'z' is for {free}")
 
 
 @contextlib.contextmanager

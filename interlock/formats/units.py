@@ -81,8 +81,8 @@ def converted(assembly: Assembly, unit) -> Assembly:
 
     >>> from interlock.blocks import presets
     >>> cm = converted(with_unit(presets.cube_grid(), "m"), "cm")
-    >>> cm.unit, float(cm.bounds[0, 1, 0])
-    ('cm', 100.0)
+    >>> cm.unit, round(float(cm.volumes[0]))  # a cube of 1 m is 1,000,000 cm^3
+    ('cm', 1000000)
     """
     unit = unit_name(unit)
     if unit is None or assembly.unit == unit:
