@@ -29,7 +29,7 @@ LARGEST_COORDINATE = 1e50
 
 
 def output_arguments(parser) -> None:
-    parser.add_argument("-o", "--output", required=True, metavar="FILE",
+    parser.add_argument("-o", "--output", required=True, metavar="FILE", type=output_file,
                         help=f"output file: {' '.join(OUTPUT_SUFFIXES)}, or .png for a picture (in a folder that "
                              "exists)")
     parser.add_argument("--exploded", type=exploded_factor, default=0.0,
@@ -43,6 +43,21 @@ def lattice_arguments(parser) -> None:
     parser.add_argument("--b", type=real_number, default=None, help="cell edge b (default: a)")
     parser.add_argument("--gamma", type=real_number, default=None,
                         help="cell angle in degrees (default: the crystal system's)")
+
+
+def output_file(text: str) -> str:
+    """An argparse ``type`` for ``-o``: a file in a folder that exists and can be written, checked before anything
+    is made (the one rule of every command: its output is created, the folders above it are not).
+
+    >>> output_file("p4.stl")
+    'p4.stl'
+    """
+    from interlock.files import unwritable
+
+    problem = unwritable(text, hint=f"ending in one of {' '.join(OUTPUT_SUFFIXES)} .png")
+    if problem:
+        raise argparse.ArgumentTypeError(f"cannot write {text}: {problem}")
+    return text
 
 
 def real_number(text: str) -> float:
