@@ -369,7 +369,8 @@ def _decide(assembly, frame, translational, certify, rank_rtol, lp_tol, contacts
         if contacts is not None:  # the caller's contacts may miss faces that touch: the default search is the judge
             motions = [_unless_missed(v, assembly, precision, tolerance) if v.interlocked is False else v
                        for v in motions]
-        motions = [unless_cones(v, found, assembly.centroids) if v.interlocked is False else v for v in motions]
+        motions = [unless_cones(v, found, assembly.centroids, A, budget) if v.interlocked is False else v
+                   for v in motions]
         verdict = next((v for v in motions if v.interlocked is False), motions[0])
     elif stress is not None and rank_clear:
         verdict = Verdict(True, f"positive self-stress on all {A.shape[0]} rows and full column rank",
