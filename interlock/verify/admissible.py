@@ -24,13 +24,15 @@ import dataclasses
 
 import numpy as np
 import scipy.linalg
+import scipy.optimize
 import scipy.sparse as sp
 
+from interlock.verify.first_order import matrix_rank
 from interlock.verify.margin import BEND_FACTOR, row_tolerances
 from interlock.verify.matrix import InterlockingMatrix, interlocking_matrix
 
 __all__ = ["moving_names", "rigid_across_bends", "unless_bent", "unless_missed", "unless_cones", "cone_pressure",
-           "bent_contacts", "MOVING_RTOL"]
+           "cone_search", "bent_contacts", "MOVING_RTOL", "CONE_BRANCHES", "CONE_RANK_RTOL", "CONE_LP_TOL"]
 
 #: Blocks whose twist is below this fraction of the largest one do not move.
 MOVING_RTOL = 1e-6
@@ -188,8 +190,8 @@ def cone_pressure(motion, found, centroids) -> np.ndarray:
     return out
 
 
-def unless_cones(verdict, found, centroids):
-    """The "not interlocked" verdict, or an inconclusive one when its motion presses into a cone of normals.
+def unless_cones(verdict, found, centroids, A: InterlockingMatrix | None = None, budget=None):
+    """The "not interlocked" verdict, or one decided over the cones of normals its motion presses into.
 
     A vertex-edge, vertex-vertex or parallel-edge touch admits a cone of
     normals (:attr:`~interlock.blocks.contact.Contact.normals`): to first
@@ -198,8 +200,10 @@ def unless_cones(verdict, found, centroids):
     together along every normal of such a cone (by more than
     :data:`MOVING_RTOL` of the motion) is no first-order motion of the
     blocks.  A sliding motion may be reversed; when its reverse presses into
-    no cone it is the answer.  Otherwise the verdict becomes None, naming
-    the contact.
+    no cone it is the answer.  Otherwise, given ``A``, :func:`cone_search`
+    decides: a motion that presses into no cone (False, with it), none in any
+    branch (True: infinitesimally interlocked with the cones), or too many
+    branches (None, naming the contact).
     """
     cones = [c for c in found if c.normals is not None and c.kind != "face"]
     if verdict.motion is None or not cones:
@@ -211,8 +215,130 @@ def unless_cones(verdict, found, centroids):
         return dataclasses.replace(verdict, motion=-verdict.motion)
     worst = cones[int(np.argmax(pressure))]
     pressed = int((pressure > MOVING_RTOL).sum())
-    return dataclasses.replace(verdict, interlocked=None, status=(
-        f"floating point is not conclusive: {moving_names(verdict.moving)} a first-order {verdict.motion_kind} "
-        f"motion of the rows of A, but it presses into {pressed} {worst.kind} contact(s) along every admissible "
-        f"normal (blocks {worst.i}-{worst.j}: a cone of {len(worst.normals)} normals, which gives no row of A); "
-        "other motions were not searched"))
+    undecided = (f"floating point is not conclusive: {moving_names(verdict.moving)} a first-order "
+                 f"{verdict.motion_kind} motion of the rows of A, but it presses into {pressed} {worst.kind} "
+                 f"contact(s) along every admissible normal (blocks {worst.i}-{worst.j}: a cone of "
+                 f"{len(worst.normals)} normals, which gives no row of A)")
+    if A is None:
+        return dataclasses.replace(verdict, interlocked=None, status=undecided + "; other motions were not searched")
+    found_motion, kind, solves = cone_search(A, cones, centroids, budget=budget)
+    if kind == "undecided":
+        return dataclasses.replace(verdict, interlocked=None, status=(
+            f"{undecided}; {solves} branches over the cones' normals did not decide (at most {CONE_BRANCHES})"))
+    if kind == "none":
+        return dataclasses.replace(verdict, interlocked=True, motion=None, motion_kind=None, moving=(), stress=None,
+                                   status=(f"no first-order motion: the rows of A leave motions, but each presses "
+                                           f"into a contact whose admissible normals are a cone ({len(cones)} "
+                                           f"such contacts; {solves} branches over their normals, every one "
+                                           "without a motion)"))
+    motion, moving = found_motion
+    opening = kind == "opening"
+    return dataclasses.replace(verdict, interlocked=False, motion=motion, moving=moving, motion_kind=kind, status=(
+        f"{moving_names(moving)} a first-order motion that {'opens' if opening else 'keeps every'} contact"
+        f"{'s' if opening else ''} and presses into none of the {len(cones)} contacts whose admissible normals are "
+        f"a cone (found in {solves} branches over their normals)"))
+
+
+#: At most this many branches (linear programs) over the normals of cone contacts (:func:`cone_search`); beyond,
+#: the verdict stays inconclusive.  Each branch adds one normal of one pressed cone as a row.
+CONE_BRANCHES = 256
+#: The rank tolerance of the branches' matrices (relative to their largest singular value): that of ``check``.
+CONE_RANK_RTOL = 1e-9
+#: A branch's motion LP value above this opens a contact: ``check``'s LP tolerance.
+CONE_LP_TOL = 1e-7
+
+
+def cone_search(A: InterlockingMatrix, cones, centroids, budget=None, limit: int = CONE_BRANCHES):
+    """A first-order motion of ``A`` that presses into none of the ``cones``, or a proof that there is none.
+
+    Non-penetration at a contact with a cone of admissible normals
+    ``n_1 .. n_k`` says ``max_k n_k . (v_j - v_i) >= 0``: a union of ``k``
+    half-spaces.  The motions are searched branch by branch: a motion of the
+    current rows (the motion LP ``max 1^T A' x, 0 <= A' x <= 1``, else the
+    kernel of ``A'``) that presses into no cone is the answer; otherwise the
+    most pressed cone is split, one branch per normal, each adding that
+    normal's row.  The branches cover the union exactly, so when every
+    branch ends without a motion, ``{x : A x >= 0, every cone kept} = {0}``.
+
+    Returns
+    -------
+    ((motion, moving) or None, kind, branches)
+        ``kind`` is ``"opening"`` or ``"sliding"`` (a motion: one twist per
+        block, scaled so that ``max(|omega| L, |t|) = 1``), ``"none"`` (no
+        motion in any branch) or ``"undecided"`` (more than ``limit``
+        branches).
+    """
+    rows = [_cone_rows(A, c, centroids) for c in cones]
+    stack = [sp.csr_matrix((0, A.shape[1]))]
+    solves = 0
+    while stack:
+        if solves >= limit:
+            return None, "undecided", solves
+        if budget is not None:
+            budget.check("lp")
+        extra = stack.pop()
+        solves += 1
+        matrix = sp.vstack([A.matrix, extra]).tocsr()
+        x, kind = _some_motion(matrix, budget)
+        if x is None:
+            continue
+        candidates = [x] + ([-x] if kind == "sliding" else [])
+        pressure = [np.array([-(r @ y).max() for r in rows]) for y in candidates]
+        for y, p in zip(candidates, pressure):
+            if p.max() <= MOVING_RTOL * np.abs(y).max():
+                return _as_motion(A, y, len(centroids)), kind, solves
+        worst = int(np.argmax(pressure[0]))
+        order = np.argsort(rows[worst] @ x)  # the least pressed normal last: tried first
+        for k in order:
+            stack.append(sp.vstack([extra, sp.csr_matrix(rows[worst][k])]))
+    return None, "none", solves
+
+
+def _cone_rows(A: InterlockingMatrix, contact, centroids) -> np.ndarray:
+    """One row of ``A``'s kind per normal of the contact's cone (dense, over ``A``'s columns)."""
+    size = A.block_size
+    column = {int(b): k for k, b in enumerate(A.free)}
+    p = np.asarray(contact.vertices, dtype=float)[0]
+    out = np.zeros((len(contact.normals), A.shape[1]))
+    for n_index, n in enumerate(np.asarray(contact.normals, dtype=float)):
+        for b, sign in ((contact.i, -1.0), (contact.j, 1.0)):
+            k = column.get(int(b))
+            if k is None:
+                continue
+            if A.translational:
+                out[n_index, size * k:size * k + 3] = sign * n
+            else:
+                r = (p - centroids[b]) / A.length_scale
+                out[n_index, size * k:size * k + 6] = sign * np.r_[np.cross(r, n), n]
+    return out
+
+
+def _some_motion(matrix, budget=None):
+    """A non-zero ``x`` with ``matrix x >= 0``: opening by the motion LP, else a kernel vector; (None, None)."""
+    m, n = matrix.shape
+    if n == 0:
+        return None, None
+    if m:
+        options = {}
+        if budget is not None and budget.solver_limit() is not None:
+            options["time_limit"] = budget.solver_limit()
+        result = scipy.optimize.linprog(-np.asarray(matrix.sum(axis=0)).ravel(), A_ub=sp.vstack([-matrix, matrix]),
+                                        b_ub=np.r_[np.zeros(m), np.ones(m)], bounds=(None, None), method="highs-ds",
+                                        options=options)
+        if result.status == 0 and -result.fun > CONE_LP_TOL:
+            return result.x, "opening"
+    rank, kernel, _ = matrix_rank(matrix, CONE_RANK_RTOL, budget)
+    if kernel.shape[1]:
+        return kernel[:, 0], "sliding"
+    return None, None
+
+
+def _as_motion(A: InterlockingMatrix, x, count: int):
+    """A column vector as one twist per block (zero for fixed ones), scaled, and the blocks it moves."""
+    twists = A.twists(x)
+    size = np.maximum(np.abs(twists[:, :3]).max(axis=1) * A.length_scale, np.abs(twists[:, 3:]).max(axis=1))
+    twists = twists / size.max()
+    motion = np.zeros((count, 6))
+    motion[A.free] = twists
+    moving = tuple(int(b) for b, s in zip(A.free, size) if s > MOVING_RTOL * size.max())
+    return motion, moving
