@@ -454,3 +454,39 @@ def test_fig_5a_default_frame_is_the_red_p4_frame_and_interlocks():
     assert tetrahedra("p6", radius=1.0).frame == tetrahedra("p6", radius=1.0).boundary()  # no frame drawn
     with pytest.raises(PresetError, match="frame must be 'figure', 'boundary'"):
         tetrahedra("p4", frame="red")
+
+
+# --- the tetrahedral-octahedral honeycomb layer -----------------------------------------------------------
+
+
+@pytest.mark.parametrize("radius", [1.0, 2.0])
+def test_honeycomb_layer_is_the_tet_oct_honeycomb_between_two_planes(radius):
+    layer = presets.honeycomb_layer(radius)
+    assert set(layer.types.tolist()) == {0, 1, 2}  # tetrahedra standing up, hanging down, and octahedra
+    volumes = [float(m.volume) for m in layer.meshes]
+    assert volumes[0] == pytest.approx(math.sqrt(2) / 12) and volumes[1] == pytest.approx(math.sqrt(2) / 12)
+    assert volumes[2] == pytest.approx(math.sqrt(2) / 3)  # the regular octahedron of edge 1: four tetrahedra
+    for mesh in layer.meshes:
+        assert mesh.is_watertight and mesh.volume > 0
+        lengths = np.linalg.norm(_edge_vectors(mesh), axis=1)
+        assert np.allclose(lengths, 1.0)  # regular solids of edge 1
+    z = np.concatenate([m.vertices[:, 2] for m in layer.world_meshes()])
+    assert z.min() == pytest.approx(0.0, abs=1e-12) and z.max() == pytest.approx(presets.HONEYCOMB_HEIGHT)
+    meshes = layer.world_meshes()
+    for i, j in layer.neighbours.edges:
+        assert _separated(meshes[i], meshes[j]), (i, j)
+    # inside the layer every tetrahedron shares its three slanted faces with octahedra, every octahedron six
+    found = contacts(layer)
+    degree = Counter(k for c in found for k in (c.i, c.j))
+    inner = [k for k in range(len(layer)) if k not in layer.frame]
+    assert all(degree[k] == (6 if layer.types[k] == 2 else 3) for k in inner)
+    assert set(layer.frame) == set(layer.boundary())
+
+
+def test_honeycomb_layer_frame_and_bad_input():
+    assert presets.honeycomb_layer(1.0, frame=None).frame == ()
+    assert presets.honeycomb_layer(1.0, frame=[0]).frame == (0,)
+    with pytest.raises(PresetError, match="radius must be >= 0"):
+        presets.honeycomb_layer(-1)
+    with pytest.raises(PresetError, match="frame must be 'boundary'"):
+        presets.honeycomb_layer(1.0, frame="ring")
