@@ -15,7 +15,7 @@ import trimesh
 from interlock.blocks.assembly import MAX_COORDINATE, Assembly
 from interlock.blocks.info import restored
 from interlock.files import unwritable
-from interlock.formats import compas, gltf, obj, ply, rhino, stl, threemf, vtu
+from interlock.formats import compas, gltf, obj, off, ply, rhino, stl, threemf, vtu
 from interlock.formats.bodies import split_bodies
 from interlock.formats.common import GLTF_TO_Z_UP, FormatError, MeshFile, as_assembly
 from interlock.formats.scene import quiet_trimesh, read_scene
@@ -46,23 +46,26 @@ FORMATS = {
     ".3dm": "Rhino 3dm (rhino3dm, the 'rhino' extra) in the assembly's unit; one mesh object per block with the "
             "designer's names, layers and user text where read from a 3dm (else 'block_0007 <label>', a layer "
             "per class), a 'frame' layer, info as document user text",
+    ".off": "OFF; one mesh whose blocks share no vertex (a block per set of faces sharing vertices); the header, the "
+            "frame, labels and info as comments",
     ".json": "COMPAS assembly JSON (compas_assembly / compas_cra); one node per block with is_support from the "
              "frame, names and labels as node attributes, info (and the unit) as an assembly attribute",
 }
-#: The suffixes :func:`read` reads: those of :data:`FORMATS`, ``.gltf``, and any other mesh format trimesh
-#: reads (``.off``, ...), one block per body.
-READ_FORMATS = (*FORMATS, ".gltf", ".off")
+#: The suffixes :func:`read` reads: those of :data:`FORMATS` and ``.gltf``; any other mesh format trimesh reads
+#: is read too, one block per body.
+READ_FORMATS = (*FORMATS, ".gltf")
 #: The formats that keep the blocks' labels and ``Assembly.info``; the others keep the blocks, the frame and
 #: the unit, and the labels come back as ``"<file name>:block_0007"``.
-LABELLED_FORMATS = (".obj", ".ply", ".glb", ".3mf", ".3dm", ".json")
+LABELLED_FORMATS = (".obj", ".ply", ".off", ".glb", ".3mf", ".3dm", ".json")
 #: The up-axis of the formats that have a convention of their own; the others are written +Z up unless
 #: ``up="y"`` is asked for, and say which in their header.
 UP_CONVENTIONS = {".glb": "y", ".gltf": "y", ".3mf": "z", ".3dm": "z", ".json": "z"}
 # the readers of mesh files; None: every body of the trimesh scene (plain STL, plain PLY, OFF, ...)
-_MESH_READERS = {".stl": stl.read_stl, ".ply": ply.read_ply, ".obj": obj.read_obj, ".vtu": vtu.read_vtu,
-                 ".xdmf": vtu.read_vtu, ".glb": gltf.read_gltf, ".gltf": gltf.read_gltf, ".3mf": threemf.read_3mf}
-_WRITERS = {".stl": stl.write_stl, ".obj": obj.write_obj, ".ply": ply.write_ply, ".vtu": vtu.write_vtu,
-            ".xdmf": vtu.write_vtu}
+_MESH_READERS = {".stl": stl.read_stl, ".ply": ply.read_ply, ".obj": obj.read_obj, ".off": off.read_off,
+                 ".vtu": vtu.read_vtu, ".xdmf": vtu.read_vtu, ".glb": gltf.read_gltf, ".gltf": gltf.read_gltf,
+                 ".3mf": threemf.read_3mf}
+_WRITERS = {".stl": stl.write_stl, ".obj": obj.write_obj, ".ply": ply.write_ply, ".off": off.write_off,
+            ".vtu": vtu.write_vtu, ".xdmf": vtu.write_vtu}
 
 
 def read(paths, frame=None, *, unit=None, up=None, progress=None) -> Assembly:
@@ -143,7 +146,7 @@ def write(obj, path, *, unit=None, up=None, progress=None) -> Path:
         The unit to write in: an assembly with a unit is converted to it (every size kept), one without is
         declared in it.  Default: the assembly's unit.
     up : {"z", "y"}, optional
-        The up-axis of a format without a convention of its own (OBJ, STL, PLY, VTU, XDMF); default ``"z"``.
+        The up-axis of a format without a convention of its own (OBJ, STL, PLY, OFF, VTU, XDMF); default ``"z"``.
         ``"y"`` suits Blender's and three.js' importers; the header says so and reading turns it back.
     progress : callable, optional
         Called as ``progress(done, total)`` per block while a ``.3dm`` or ``.json`` file is written.

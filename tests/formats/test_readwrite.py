@@ -73,12 +73,12 @@ def test_gltf_holds_metres_and_3mf_the_assembly_unit(tmp_path):
         assert ET.fromstring(package.read("3D/3dmodel.model")).get("unit") == "meter"  # as glTF: 1 unit = 1 m
 
 
-@pytest.mark.parametrize("suffix", [".obj", ".stl", ".ply", ".vtu", ".xdmf"])
+@pytest.mark.parametrize("suffix", [".obj", ".stl", ".ply", ".off", ".vtu", ".xdmf"])
 def test_up_y_files_are_y_up_and_read_back_z_up(tmp_path, suffix):
     tall = trimesh.creation.box(bounds=[[0, 0, 0], [1, 2, 5]])  # 5 high along interlock's +Z
     one = interlock.blocks.Assembly.from_meshes([tall])
     path = write(one, tmp_path / f"tall{suffix}", up="y")
-    raw = trimesh.load(path, force="mesh", process=False) if suffix in (".obj", ".stl", ".ply") else None
+    raw = trimesh.load(path, force="mesh", process=False) if suffix in (".obj", ".stl", ".ply", ".off") else None
     if raw is not None:
         extent = raw.bounds[1] - raw.bounds[0]
         assert extent[1] == pytest.approx(5.0)  # +Y is up in the file
@@ -181,3 +181,13 @@ def test_material_names_are_one_per_class_in_every_format(tmp_path):
 
 def test_units_table_is_in_metres():
     assert METRES["in"] == 0.0254 and METRES["mm"] == 1e-3
+
+
+def test_off_is_read_by_meshio_and_checked_against_its_counts(tmp_path, hexagon):
+    meshio = pytest.importorskip("meshio")
+    path = write(hexagon, tmp_path / "h.off")
+    assert sum(len(c.data) for c in meshio.read(path).cells) == sum(len(hexagon.meshes[t].faces) for t in hexagon.types)
+    lines = path.read_text().splitlines()
+    (tmp_path / "cut.off").write_text("\n".join(lines[:-5]) + "\n")
+    with pytest.raises(FormatError, match="is cut short: its count line announces"):
+        read(tmp_path / "cut.off")
