@@ -49,16 +49,31 @@ VERIFIED_COLUMNS = 6000
 EXACT_COLUMNS = 2000
 
 
-def certify_verdict(assembly, A: InterlockingMatrix, verdict):
-    """The verdict re-checked rigorously: ``certified`` set and the method added to ``status``."""
+def certify_verdict(assembly, A: InterlockingMatrix, verdict, budget=None):
+    """The verdict re-checked rigorously: ``certified`` set and the method added to ``status``.
+
+    The rows of ``A`` are those of every contact that admits one normal: faces, vertex-face and edge-edge
+    contacts (Remark 3.11) alike, so a stress certificate covers them all.  A verdict decided over the cones of
+    normals of degenerate contacts (:func:`~interlock.verify.admissible.cone_search`) has no certificate on
+    ``A`` alone: an "interlocked" one is left uncertified, a motion is followed by finite steps.
+    ``budget`` (:class:`~interlock.verify.budget.Budget`): checked between the steps ("certify").
+    """
+    if budget is not None:
+        budget.check("certify")
     if verdict.interlocked is None:
         return dataclasses.replace(verdict, status=verdict.status + "; nothing to certify")
     if verdict.interlocked and A.shape[1] == 0:
         return dataclasses.replace(verdict, certified=True)
     flint = _flint()
+    if verdict.interlocked and verdict.stress is None:  # decided over cones of normals: no stress on A
+        return _uncertified(verdict, "not certified: decided by branches over the cones of normals of vertex-edge "
+                                     "and vertex-vertex contacts, which no stress of A certifies")
     if verdict.interlocked:
         ok, note = _stress_certificate(flint, A.matrix, verdict.stress)
         return dataclasses.replace(verdict, certified=ok, status=f"{verdict.status}; {note}")
+    if budget is not None:
+        budget.check("certify")
+    verdict = _cones_in_float(verdict)
     if verdict.motion_kind == "opening":
         note = _opening_certificate(flint, A, verdict.motion)
         if note is not None:
@@ -74,8 +89,19 @@ def certify_verdict(assembly, A: InterlockingMatrix, verdict):
         # finite steps cannot tell a true slide from one across faces bent below the tolerances
         return _uncertified(verdict, "not certified: the exact matrix has full column rank, so the sliding "
                                      "motion exists only up to rounding or tolerance")
+    if budget is not None:
+        budget.check("certify")
     ok, note = _finite_steps(assembly, verdict)
     return dataclasses.replace(verdict, certified=ok, status=f"{verdict.status}; {note}")
+
+
+def _cones_in_float(verdict):
+    """A motion's verdict noting that contacts with a cone of normals (no row of A) were checked in float only."""
+    cones = sum(n for k, n in getattr(verdict, "contact_kinds", {}).items() if k.endswith("(cone)"))
+    if not cones or verdict.motion is None:
+        return verdict
+    return dataclasses.replace(verdict, status=f"{verdict.status}; the {cones} contacts whose admissible normals "
+                                               "are a cone were checked in floating point only")
 
 
 def _stress_certificate(flint, matrix, w: np.ndarray):

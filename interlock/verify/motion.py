@@ -186,7 +186,7 @@ def moved(assembly: Assembly, motion, s: float, frame=None) -> Assembly:
 
 def finite_motion(assembly: Assembly, motion, *, frame=None, span=None, overlap_rtol: float = OVERLAP_RTOL,
                   reach_rtol: float = REACH_RTOL, steps: int = STEPS, small_steps=SMALL_STEPS,
-                  separation_rtol: float = SEPARATION_RTOL) -> FiniteMotion:
+                  separation_rtol: float = SEPARATION_RTOL, budget=None) -> FiniteMotion:
     """Move blocks along a motion by growing steps and measure whether they collide.
 
     :func:`~interlock.verify.check` decides *infinitesimal* interlocking
@@ -231,6 +231,9 @@ def finite_motion(assembly: Assembly, motion, *, frame=None, span=None, overlap_
     separation_rtol : float
         Stop once every moving block is farther than this (times the model
         size) from every block that does not move (:data:`SEPARATION_RTOL`).
+    budget : Budget, optional
+        A time budget (:mod:`interlock.verify.budget`), checked before every
+        step: TimeLimitReached("beyond") when spent.
 
     Returns
     -------
@@ -301,6 +304,8 @@ def finite_motion(assembly: Assembly, motion, *, frame=None, span=None, overlap_
     measure = MotionOverlaps(assembly, moving, gap)
     rows, collision, separated = [], None, False
     for k, s in enumerate(parameters):
+        if budget is not None:  # a time budget (interlock.verify.budget): TimeLimitReached("beyond") when spent
+            budget.check("beyond")
         T = path(s)
         volume, fraction, pair, apart = measure(T)
         rows.append((s, _displacement(T, points), volume, fraction, pair))

@@ -194,7 +194,7 @@ def gap_expansion(points, normals, point_centres, plane_centres, length_scale: f
 
 
 def prestress_stability(points, normals, point_blocks, plane_blocks, centroids, free, length_scale: float = 1.0,
-                        *, rtol: float = SECOND_ORDER_RTOL, skipped: int = 0) -> SecondOrder:
+                        *, rtol: float = SECOND_ORDER_RTOL, skipped: int = 0, budget=None) -> SecondOrder:
     """Is there a stress that makes the second-order form negative definite on the kernel?
 
     ``points[k]`` is a material point of block ``point_blocks[k]`` on the face
@@ -281,7 +281,7 @@ def prestress_stability(points, normals, point_blocks, plane_blocks, centroids, 
                            largest_eigenvalue=None, stress=full, **base)
     omegas = _reduced_forms(hessians[support], ends[support], kernel)
     scale = max(float(np.linalg.norm(hessians[support], axis=(1, 2)).max()), 1e-300)  # Frobenius: rotation invariant
-    lam, top, bound = _cutting_planes(A_S.T, omegas, stress[support], rtol * scale)
+    lam, top, bound = _cutting_planes(A_S.T, omegas, stress[support], rtol * scale, budget)
     full[np.flatnonzero(live)[support]] = lam
     found = dict(largest_eigenvalue=top / scale, bound=None if bound is None else bound / scale, stress=full)
     if top < -rtol * scale:
@@ -298,13 +298,17 @@ def prestress_stability(points, normals, point_blocks, plane_blocks, centroids, 
 
 
 def second_order(assembly: Assembly, frame=None, *, contacts=None, rtol: float = SECOND_ORDER_RTOL,
-                 interior_rtol: float = INTERIOR_RTOL) -> SecondOrder:
+                 interior_rtol: float = INTERIOR_RTOL, budget=None) -> SecondOrder:
     """Prestress stability of an assembly's contacts (module docstring): is every first-order motion blocked?
 
     Each contact-polygon vertex strictly inside one block's face (farther than
     ``interior_rtol`` times the model size from its boundary) gives the gap
     function of the other block's material point on that face; vertices on
-    the boundary of both faces are skipped (counted in ``skipped``).
+    the boundary of both faces are skipped (counted in ``skipped``), and so
+    are point contacts other than a corner inside a face (edge-edge crossings
+    and cones of normals: no gap function of a point on a face).  ``budget``
+    (:class:`~interlock.verify.budget.Budget`): checked between the cutting
+    planes ("beyond"), its time left given to every LP.
 
     Examples
     --------
@@ -324,8 +328,10 @@ def second_order(assembly: Assembly, frame=None, *, contacts=None, rtol: float =
     free = [b for b in range(len(assembly)) if b not in fixed]
     found = model_contacts(assembly, contacts)
     points, normals, p_blocks, q_blocks, skipped = _gap_constraints(assembly, found, set(free), interior_rtol)
+    if budget is not None:
+        budget.check("beyond")
     result = prestress_stability(points, normals, p_blocks, q_blocks, assembly.centroids, free, assembly.scale,
-                                 rtol=rtol, skipped=skipped)
+                                 rtol=rtol, skipped=skipped, budget=budget)
     result.tolerances["interior_rtol"] = interior_rtol
     return result
 
@@ -409,8 +415,11 @@ def _reduced_forms(hessians, ends, kernel) -> np.ndarray:
     return np.einsum("kad,kab,kbe->kde", Z, hessians, Z)
 
 
-def _cutting_planes(A_T: np.ndarray, omegas: np.ndarray, start: np.ndarray, tol: float):
-    """``(lambda, largest eigenvalue at lambda, lower bound over all stresses)`` (Kelley's method)."""
+def _cutting_planes(A_T: np.ndarray, omegas: np.ndarray, start: np.ndarray, tol: float, budget=None):
+    """``(lambda, largest eigenvalue at lambda, lower bound over all stresses)`` (Kelley's method).
+
+    ``budget`` (:class:`~interlock.verify.budget.Budget`): checked before each cut ("beyond"), its time left
+    given to each LP."""
     k, d, _ = omegas.shape
     start = start / start.sum()
     cuts = [np.eye(d)[i] for i in range(d)] + list(np.linalg.eigh(np.einsum("k,kde->de", start, omegas))[1].T)
@@ -418,10 +427,15 @@ def _cutting_planes(A_T: np.ndarray, omegas: np.ndarray, start: np.ndarray, tol:
     A_eq = np.vstack([np.hstack([A_T, np.zeros((A_T.shape[0], 1))]), np.r_[np.ones(k), 0.0]])
     b_eq = np.r_[np.zeros(A_T.shape[0]), 1.0]
     for _ in range(CUTTING_PLANES):
+        options = {}
+        if budget is not None:
+            budget.check("beyond")
+            if budget.solver_limit() is not None:
+                options["time_limit"] = budget.solver_limit()
         values = np.array([np.einsum("d,kde,e->k", v, omegas, v) for v in cuts])
         result = linprog(np.r_[np.zeros(k), 1.0], A_ub=np.hstack([values, -np.ones((len(cuts), 1))]),
                          b_ub=np.zeros(len(cuts)), A_eq=A_eq, b_eq=b_eq,
-                         bounds=[(0, None)] * k + [(None, None)], method="highs")
+                         bounds=[(0, None)] * k + [(None, None)], method="highs", options=options)
         if result.status != 0:
             break
         lam, bound = result.x[:k], float(result.x[k])

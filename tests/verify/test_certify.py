@@ -1,6 +1,7 @@
 """Certificates (interlock/verify/certify.py): verified floating point for the stress, exact arithmetic otherwise."""
 
 import numpy as np
+import pytest
 import scipy.sparse as sp
 
 from interlock.blocks import presets, random_hexagon, rhomblock_assembly
@@ -54,3 +55,22 @@ def test_beyond_both_limits_the_verdict_says_it_is_not_certified_and_why(monkeyp
     v = check(presets.interlocking_cubes(), certify=True)
     assert v.interlocked is True and not v.certified
     assert "too many for verified floating point (at most 0)" in v.status
+
+
+def test_a_spent_budget_stops_the_certificate():
+    from interlock.blocks import presets as _presets
+    from interlock.verify.budget import Budget, TimeLimitReached
+    from interlock.verify.certify import certify_verdict
+    from interlock.verify.matrix import interlocking_matrix
+
+    cubes = _presets.interlocking_cubes()
+    verdict = check(cubes)
+    with pytest.raises(TimeLimitReached, match="certify"):
+        certify_verdict(cubes, interlocking_matrix(cubes), verdict, budget=Budget(limit=1e-9, started=0.0))
+
+
+def test_edge_contact_rows_are_covered_by_the_stress_certificate():
+    from interlock.blocks import presets as _presets
+
+    v = check(_presets.tetrahedra("p3"), certify=True)
+    assert v.interlocked is True and v.certified and v.contact_kinds["edge-edge"] > 0

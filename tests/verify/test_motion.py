@@ -351,3 +351,16 @@ def test_result_is_a_frozen_value():
     assert isinstance(result, FiniteMotion)
     with pytest.raises(AttributeError):
         result.shown = False
+
+
+def test_a_spent_budget_stops_the_finite_motion():
+    import trimesh as _trimesh
+
+    from interlock.verify.budget import Budget, TimeLimitReached
+
+    grid = [_trimesh.creation.box(bounds=[[x, y, 0], [x + 1, y + 1, 1]]) for x in range(3) for y in range(3)]
+    grid = Assembly.from_meshes(grid, frame=[0, 1, 2, 3, 5, 6, 7, 8])
+    up = np.zeros((9, 6))
+    up[4, 5] = 1.0
+    with pytest.raises(TimeLimitReached, match="beyond"):
+        finite_motion(grid, up, budget=Budget(limit=1e-9, started=0.0))

@@ -223,3 +223,10 @@ def test_without_cutting_planes_an_unblocked_turn_is_undecided(monkeypatch):
     points, normals, p, q = _cup_constraints(1, 0.5)
     r = prestress_stability(points, normals, p, q, np.zeros((11, 3)), free=[0])
     assert r.blocked is None and "undecided" in r.status and r.bound is None
+
+
+def test_a_spent_budget_stops_second_order():
+    from interlock.verify.budget import Budget, TimeLimitReached
+
+    with pytest.raises(TimeLimitReached, match="beyond"):
+        second_order(presets.cube_grid(), budget=Budget(limit=1e-9, started=0.0))
