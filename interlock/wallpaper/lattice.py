@@ -9,7 +9,7 @@ import numpy as np
 
 from interlock.errors import LatticeError
 
-__all__ = ["LatticeParameters", "lattice_parameters", "conventional_basis", "LENGTH_RANGE"]
+__all__ = ["LatticeParameters", "lattice_parameters", "conventional_basis", "LENGTH_RANGE", "GAMMA_MARGIN"]
 
 #: Relative tolerance for "b equals a" and "gamma equals 90/120 degrees".
 PARAMETER_RTOL = 1e-9
@@ -22,6 +22,10 @@ _DEFAULT_OBLIQUE_GAMMA = 75.0
 #: GLB and 3MF coordinates) and far within ``interlock.blocks.assembly.MAX_COORDINATE``; 1e-30 keeps volumes of
 #: such cells (1e-90) far above float64's smallest numbers.
 LENGTH_RANGE = (1e-30, 1e30)
+#: How far (degrees) gamma must stay from 0 and 180: a cell flatter than that (sin gamma < 2e-5) has tiles a
+#: hundred thousand times longer than wide, whose blocks the mesh checks cannot tell from flat ones (gamma =
+#: 1e-300 made an Escher block that is no closed surface).
+GAMMA_MARGIN = 1e-3
 
 _RULES = {
     # system: (b must equal a, required gamma or None, text for the message)
@@ -57,6 +61,9 @@ def lattice_parameters(group_name: str, system: str, a=1.0, b=None, gamma=None) 
     gamma = _number("gamma", gamma, group_name, allowed)
     if not 0.0 < gamma < 180.0:
         raise LatticeError(f"{group_name}: gamma = {gamma} degrees gives a degenerate lattice; allowed: {allowed}")
+    if not GAMMA_MARGIN <= gamma <= 180.0 - GAMMA_MARGIN:
+        raise LatticeError(f"{group_name}: gamma = {gamma:g} degrees gives a cell too flat for its blocks; allowed: "
+                           f"{GAMMA_MARGIN:g} <= gamma <= {180 - GAMMA_MARGIN:g} degrees")
     if b_equals_a and not math.isclose(a, b, rel_tol=PARAMETER_RTOL):
         raise LatticeError(f"{group_name} has a {system} lattice, so b must equal a (got a = {a}, b = {b}); allowed: {allowed}")
     if required_gamma is not None and not math.isclose(gamma, required_gamma, rel_tol=PARAMETER_RTOL):

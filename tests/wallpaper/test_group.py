@@ -165,3 +165,10 @@ def test_cell_lengths_whose_areas_would_overflow_are_refused(a):
         wallpaper.group("p1", a=a)
     with pytest.raises(InterlockError, match="outside"):
         wallpaper.group("pm", b=a)
+
+
+@pytest.mark.parametrize("gamma", [1e-300, 5e-4, 180 - 5e-4])
+def test_a_cell_too_flat_for_its_blocks_is_refused(gamma):
+    with pytest.raises(LatticeError, match="too flat"):
+        wallpaper.group("p1", gamma=gamma)
+    assert wallpaper.group("p1", gamma=1e-3).parameters.gamma == 1e-3
