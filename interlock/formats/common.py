@@ -187,8 +187,12 @@ def touching_bodies(path: Path) -> str:
 
 def json_value(text):
     """The value of a JSON text; None for one that is not JSON (or nests deeper than :data:`MAX_NESTING`)."""
+    text = text or ""
+    if isinstance(text, (bytes, str)) and text.count("[" if isinstance(text, str) else b"[") + text.count(
+            "{" if isinstance(text, str) else b"{") > MAX_NESTING and nesting(text) > MAX_NESTING:
+        return None  # only a text with that many brackets can nest that deep
     try:
-        return json.loads(text or "") if nesting(text or "") <= MAX_NESTING else None
+        return json.loads(text)
     except (ValueError, RecursionError):
         return None
 

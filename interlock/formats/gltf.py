@@ -41,7 +41,7 @@ def read_gltf(path: Path) -> MeshFile:
         scene = trimesh.load_scene(path)
     metadata = scene.metadata if isinstance(scene.metadata, dict) else {}
     header = metadata.get("interlock") if isinstance(metadata.get("interlock"), str) else None
-    found = read_scene(path, GLTF_TO_Z_UP, header, stored_meaning(metadata), GLTF_UNIT)
+    found = read_scene(path, GLTF_TO_Z_UP, header, stored_meaning(metadata), GLTF_UNIT, scene)
     stated = header_words(header).get("unit") if header else GLTF_UNIT
     if header and stated is None:  # an assembly without unit, written as it was
         return _with(found, None)

@@ -311,6 +311,11 @@ def _mesh_file(path: Path, split: bool, up) -> MeshFile:
 
 def _check_coordinates(path: Path, meshes) -> None:
     """An error naming the first coordinate that is not finite or beyond :data:`MAX_COORDINATE`."""
+    if not len(meshes):
+        return
+    every = np.vstack([np.asarray(mesh.vertices) for mesh in meshes])
+    if np.isfinite(every).all() and not (np.abs(every) > MAX_COORDINATE).any():
+        return
     for k, mesh in enumerate(meshes):
         vertices = np.asarray(mesh.vertices)
         bad = ~np.isfinite(vertices) | (np.abs(np.nan_to_num(vertices)) > MAX_COORDINATE)

@@ -30,16 +30,17 @@ def quiet_trimesh():
 
 
 def read_scene(path: Path, up: np.ndarray | None = None, header: str | None = None, stored=None,
-               unit: str | None = None, file_type: str | None = None) -> MeshFile:
+               unit: str | None = None, scene: trimesh.Scene | None = None) -> MeshFile:
     """One block per scene node with a triangle mesh, node transform applied, named by the node.
 
     Nodes sort by name (digits as numbers); a name ending in :data:`~interlock.formats.common.FIXED_WORD` puts
     its block in the frame.  ``up`` turns the file's coordinates to +Z up (glTF's +Y up); ``header`` is the
     file's :func:`~interlock.formats.common.file_header` text, ``stored`` its ``(labels, info)`` and ``unit``
-    the unit it states, as the format's module found them.
+    the unit it states, as the format's module found them; ``scene`` the file as trimesh loaded it, if loaded.
     """
-    with quiet_trimesh():
-        scene = trimesh.load_scene(path, file_type=file_type)
+    if scene is None:
+        with quiet_trimesh():
+            scene = trimesh.load_scene(path)
     up = np.eye(4) if up is None else up
     nodes = []
     for node in scene.graph.nodes_geometry:

@@ -10,6 +10,7 @@ and ``Assembly.info``.  Materials (base materials) are named by class.  3MF is +
 from __future__ import annotations
 
 import io
+import re
 import zipfile
 from pathlib import Path
 from xml.etree import ElementTree
@@ -39,28 +40,34 @@ def read_3mf(path: Path) -> MeshFile:
     header, stored, unit = None, {}, "mm"
     with zipfile.ZipFile(path) as package:
         for name in (n for n in package.namelist() if n.lower().endswith(".model")):
-            defined, items = set(), []
             for event, element in ElementTree.iterparse(package.open(name), events=("start", "end")):
                 tag = element.tag.rpartition("}")[2]
                 if event == "start" and tag == "model":
                     unit = unit_name(element.get("unit") or "millimeter")
+                elif tag == "resources":  # the model's metadata come before its resources
+                    break
                 elif event == "end" and tag == "metadata" and (element.get("name") or "").startswith("interlock:"):
                     key = element.get("name").partition(":")[2]
                     if key == "header":
                         header = element.text or ""
                     elif key in (LABELS_KEY, INFO_KEY):
                         stored[key] = json_value(element.text)
-                elif event == "end" and tag == "object":
-                    defined.add(element.get("id"))
-                elif event == "end" and tag == "item":
-                    items.append(element.get("objectid"))
-            undefined = [item for item in items if item not in defined]
-            if undefined and name.lower().endswith("3dmodel.model"):
-                raise FormatError(f"{path} is damaged: a build item refers to object id {undefined[0]}, which its "
-                                  f"model does not define (defined: {', '.join(sorted(defined)) or 'none'})")
+            if name.lower().endswith("3dmodel.model"):
+                _check_items(path, package.read(name))
     if header is not None and header_counts(header) is not None and "unit" not in header_words(header):
         unit = None  # an assembly without unit: written in metres, read as it was
     return read_scene(path, None, header, stored_meaning(stored), unit)
+
+
+def _check_items(path: Path, model: bytes) -> None:
+    """An error naming a build item whose object the model does not define (trimesh would log and skip it)."""
+    defined = set(re.findall(rb"<(?:\w+:)?object\b[^>]*?\sid=\"([^\"]*)\"", model))
+    items = re.findall(rb"<(?:\w+:)?item\b[^>]*?\sobjectid=\"([^\"]*)\"", model)
+    undefined = [item for item in items if item not in defined]
+    if undefined:
+        names = ", ".join(sorted(d.decode(errors="replace") for d in defined)) or "none"
+        raise FormatError(f"{path} is damaged: a build item refers to object id "
+                          f"{undefined[0].decode(errors='replace')}, which its model does not define (defined: {names})")
 
 
 def write_3mf(assembly: Assembly, path: Path) -> None:

@@ -47,7 +47,7 @@ def test_a_ply_announcing_a_million_faces_over_twelve_is_refused(tmp_path, capsy
     path.write_text(ASCII_PLY.replace("element face 24", "element face 1000000"))
     for command in (["verify", str(path)], ["convert", str(path), str(tmp_path / "x.obj")]):
         _one_line_error(capsys, command, "announces 16 vertices, 1,000,000 faces", "24 of 1,000,000 faces")
-    with pytest.raises(AssemblyError, match="cut short"):
+    with pytest.raises(AssemblyError, match="cut short"), pytest.warns(DeprecationWarning):
         interlock.blocks.Assembly.load(path)
 
 
@@ -79,7 +79,7 @@ def test_json_nested_200000_deep_is_one_line_everywhere(tmp_path, capsys, bracke
         _one_line_error(capsys, command, "nests brackets 200000 deep")
     with pytest.raises(InterlockError, match="nests brackets 200000 deep"):
         read(path)
-    with pytest.raises(AssemblyError, match="nests brackets"):
+    with pytest.raises(AssemblyError, match="nests brackets"), pytest.warns(DeprecationWarning):
         interlock.blocks.Assembly.load(path)
 
 
