@@ -27,6 +27,7 @@ from pathlib import Path
 
 import interlock
 from interlock.blocks.limits import memory_text
+from interlock.errors import InterlockError
 from interlock.files import atomic_write, unwritable, write_atomically
 from interlock.sweep.record import evaluate_chunk
 from interlock.sweep.spec import SweepError, SweepSpec, load_spec
@@ -111,6 +112,13 @@ def run(spec, output=None, executor=None, workers: int | None = None, resume: bo
     """
     spec = spec if isinstance(spec, SweepSpec) else load_spec(spec)
     check_size(spec, max_points)
+    if "stability" in spec.verdicts:  # a friction the solvers cannot represent would fail every point
+        from interlock.verify.statics.equilibrium import friction_coefficient
+
+        try:
+            friction_coefficient(spec.mu)
+        except InterlockError as error:
+            raise SweepError(f"mu: {error}") from None
     if not isinstance(keep, bool):
         raise SweepError(f"keep must be True or False, got {keep!r}")
     writer = None if output is None else _writer(Path(output), resume)

@@ -301,13 +301,25 @@ def _check_values(family: dict, parameters: dict, samples: int) -> None:
     of a parameter used there (a sampled range gives no whole numbers: use ``values``).
     """
     if "group" in family:
-        _check_place(family["height"], "height", parameters, samples, lambda v: v > 0, "a number > 0")
+        from interlock.wallpaper.lattice import LENGTH_RANGE  # a block's volumes are products of its lengths
+
+        _check_place(family["height"], "height", parameters, samples, lambda v: 0 < v <= LENGTH_RANGE[1],
+                     "a number > 0" + (f" and at most {LENGTH_RANGE[1]:g}" if _largest(family["height"], parameters)
+                                       > LENGTH_RANGE[1] else ""))
         return
     for key in ("a", "b", "c", "seed", "variant"):
         allowed = (lambda v: v in (0, 1)) if key == "variant" else (lambda v: v >= 0 and float(v).is_integer())
         meaning = "0 or 1" if key == "variant" else "a whole number >= 0"
         _check_place(family["tiling"][key], f"tiling.{key}", parameters, samples, allowed, meaning,
                      whole=True)
+
+
+def _largest(value, parameters: dict) -> float:
+    """The largest value a fixed number or a parameter's values (or range) takes."""
+    if not isinstance(value, str):
+        return value
+    parameter = parameters[value]
+    return parameter.high if parameter.low is not None else max(parameter.values)
 
 
 def _check_place(value, what: str, parameters: dict, samples: int, allowed, meaning: str, whole=False) -> None:

@@ -624,3 +624,21 @@ def test_workers_end_when_the_sweep_is_killed_with_sigkill(tmp_path):
             except ProcessLookupError:
                 pass
         process.wait()
+
+
+@pytest.mark.parametrize("change, message", [
+    ({"height": 1e90}, r"height must be a number > 0 and at most 1e\+30, got 1e\+90"),
+    ({"height": "s", "parameters": {"s": {"values": [1.0, 1e200]}}}, r"parameter 's' takes 1e\+200"),
+    ({"verdicts": ["stability"], "mu": 1e308}, r"mu: mu = 1e\+308 is outside the range the solvers represent"),
+])
+def test_values_no_point_could_use_are_refused_before_any_is_computed(change, message, monkeypatch):
+    import importlib
+
+    calls = []
+    monkeypatch.setattr(importlib.import_module("interlock.sweep.run"), "evaluate_chunk",
+                        lambda *a: calls.append(a) or [])
+    spec = {**P4, "points": [{"edge": 0, "along": 0.5, "offset": 0.1}], **change}
+    spec.setdefault("parameters", {})
+    with pytest.raises(SweepError, match=message):
+        _threads({**spec, "verdicts": change.get("verdicts", ["criterion_4_3"])})
+    assert calls == []
