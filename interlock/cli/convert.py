@@ -56,7 +56,7 @@ def sized(assembly, args):
         before = assembly.unit
         assembly = converted(assembly, args.unit)
         if before is None:
-            words.append(f"declared in {assembly.unit} (it stated no unit)")
+            words.append(f"declared in {assembly.unit}, as it stated none")
         elif before != assembly.unit:
             words.append(f"converted from {before} to {assembly.unit}, every size kept")
     return assembly, words

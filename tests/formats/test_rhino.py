@@ -115,7 +115,7 @@ def test_generate_takes_unit_and_scale(tmp_path, kind, capsys):
     extra = ["p4", "--deform", "0:0.25,0.1", "--radius", "1"] if kind == "wallpaper" else ["--hexagon", "2", "2", "2"]
     path = tmp_path / "made.3dm"
     assert main(["generate", kind, *extra, "--unit", "mm", "--scale", "20", "-o", str(path)]) == 0
-    assert "unit mm (scaled by 20; declared in mm" in capsys.readouterr().out
+    assert "unit mm (scaled by 20; declared in mm, as it stated none)" in capsys.readouterr().out
     made = interlock.read(path)
     plain = interlock.read(interlock.write(interlock.read(path), tmp_path / "same.json"))
     assert made.unit == "mm" == plain.unit
