@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from interlock.formats import read
-from interlock.blocks import Assembly, rhomblock_assembly, random_hexagon
+from interlock.blocks import rhomblock_assembly, random_hexagon
 from interlock.cli import OUTPUT_SUFFIXES, main
 from interlock.formats import write as export
 

@@ -5,7 +5,7 @@ import pytest
 import trimesh
 
 from interlock.formats import read
-from interlock.blocks import Assembly, AssemblyError
+from interlock.blocks import AssemblyError
 from interlock.formats import read_mesh_file
 from interlock.formats.common import FIXED_WORD, file_header
 

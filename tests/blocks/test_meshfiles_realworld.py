@@ -9,7 +9,7 @@ import pytest
 import trimesh
 
 from interlock.formats import read
-from interlock.blocks import Assembly, AssemblyError, presets
+from interlock.blocks import AssemblyError, presets
 from interlock.formats import read_mesh_file
 from interlock.formats.common import GLTF_TO_Z_UP
 from interlock.cli import main
