@@ -290,14 +290,20 @@ def test_a_symlink_loop_as_a_sweeps_spec_or_output_is_one_line(tmp_path, where):
     assert status == 2 and loop.is_symlink(), err
 
 
-def test_frames_without_order_2_are_refused_by_the_helper_verify_calls():
+def test_frames_without_order_2_or_without_their_parent_folder_are_refused_by_the_helper_verify_calls(tmp_path):
     from interlock import InterlockError
-    from interlock.cli.common import frames_need_order_2
+    from interlock.cli.common import check_frames_option
 
     with pytest.raises(InterlockError, match="add --order 2"):
-        frames_need_order_2(argparse.Namespace(frames="motion", order=1))
-    frames_need_order_2(argparse.Namespace(frames="motion", order=2))
-    frames_need_order_2(argparse.Namespace(frames=None, order=1))
+        check_frames_option(argparse.Namespace(frames=str(tmp_path / "motion"), order=1))
+    with pytest.raises(InterlockError, match="does not exist; create it first"):
+        check_frames_option(argparse.Namespace(frames=str(tmp_path / "missing" / "motion"), order=2))
+    (tmp_path / "file").write_text("x")
+    with pytest.raises(InterlockError, match="it is a file"):
+        check_frames_option(argparse.Namespace(frames=str(tmp_path / "file"), order=2))
+    check_frames_option(argparse.Namespace(frames=str(tmp_path / "motion"), order=2))
+    check_frames_option(argparse.Namespace(frames=None, order=1))
+    assert not (tmp_path / "motion").exists()  # checked, not made
 
 
 def _synopsis(command: str) -> str:

@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import math
 import time
+from pathlib import Path
 
 from interlock.errors import InterlockError
 
@@ -112,12 +113,30 @@ def exploded_factor(text: str) -> float:
     return value
 
 
-def frames_need_order_2(args) -> None:
-    """Refuse ``--frames`` without ``--order 2``: the frames show the finite motion that only the verdict beyond
-    first order looks for, so without it they would never be written (``verify`` calls this first)."""
-    if getattr(args, "frames", None) is not None and getattr(args, "order", 1) != 2:
+def check_frames_option(args) -> None:
+    """Check ``verify --frames FOLDER`` before any work: it needs ``--order 2`` (the frames show the finite motion
+    that only the verdict beyond first order looks for, so without it they would never be written), and FOLDER
+    is created but not the folders above it (the one rule of every output).
+
+    >>> import argparse
+    >>> check_frames_option(argparse.Namespace(frames="motion", order=1))  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    interlock.errors.InterlockError: --frames writes the finite motion that --order 2 looks for; add --order 2 ...
+    """
+    frames = getattr(args, "frames", None)
+    if frames is None:
+        return
+    if getattr(args, "order", 1) != 2:
         raise InterlockError("--frames writes the finite motion that --order 2 looks for; add --order 2 "
-                             f"(or drop --frames {args.frames})")
+                             f"(or drop --frames {frames})")
+    from interlock.files import unwritable
+
+    problem = unwritable(frames, folder_output=True)
+    if problem is None and Path(frames).exists() and not Path(frames).is_dir():
+        problem = "it is a file, not a folder"
+    if problem:
+        raise InterlockError(f"cannot write the frames into {frames}: {problem}")
 
 
 def time_limit(seconds, started: float) -> float | None:
