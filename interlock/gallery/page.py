@@ -26,7 +26,7 @@ body { font: 15px/1.45 system-ui, sans-serif; margin: 0; color: #222; background
 .layout { display: grid; grid-template-columns: minmax(0, 1fr); max-width: 1240px; margin: 0 auto; padding: 0 16px; }
 @media (min-width: 1000px) { .layout { grid-template-columns: 250px minmax(0, 1fr); gap: 24px; }
   .toc { position: sticky; top: 0; max-height: 100vh; overflow-y: auto; } }
-.toc { padding: 12px 0; font-size: 13.5px; } .toc ol { padding-left: 1.4em; margin: 0.3em 0; }
+.toc { padding: 12px 0; font-size: 13.5px; } .toc ol { padding-left: 2.1em; margin: 0.3em 0; }
 .toc li { margin: 0.25em 0; } .toc a { color: #1a4d8f; text-decoration: none; } .toc a:hover { text-decoration: underline; }
 h1 { margin: 0.6em 0 0.2em; } .lead { color: #555; margin-top: 0; }
 .legend { background: white; border: 1px solid #ddd; border-radius: 8px; padding: 0.6em 1em; margin: 1em 0; }
@@ -41,7 +41,7 @@ h1 { margin: 0.6em 0 0.2em; } .lead { color: #555; margin-top: 0; }
   box-sizing: border-box; }
 .pictures { display: grid; grid-template-columns: repeat(auto-fill, minmax(200px, 1fr)); gap: 0.5em; }
 .pictures figure { margin: 0; } .pictures img { width: 100%; border: 1px solid #eee; cursor: zoom-in; display: block; }
-.pictures figure.wide { grid-column: 1 / -1; } .pictures figure.wide img { max-width: 1100px; }
+.pictures figure.wide { grid-column: 1 / -1; } .pictures figure.wide img { width: auto; max-width: 100%; }
 .pictures figcaption { font-size: 12px; color: #666; }
 .yes { color: #0a7a3a; font-weight: 600; } .no { color: #b3261e; font-weight: 600; } .maybe { color: #a15c00; }
 table { border-collapse: collapse; } td, th { padding: 0.15em 0.7em 0.15em 0; text-align: left; vertical-align: top; }

@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from interlock import GalleryError, wallpaper
+from interlock import GalleryError, wallpaper, write
 from interlock.blocks import Assembly, escher_block, patch, presets, random_hexagon, rhomblock_assembly
 from interlock.cli.view import add_html_argument, write_html
 from interlock.gallery.view import plain_sentence, scene, write_view
@@ -220,9 +220,7 @@ def _interlock(*args, cwd):
 
 def test_cli_view_writes_the_file_and_refuses_bad_input(tmp_path):
     grid = tmp_path / "grid.stl"
-    from interlock.gallery import export
-
-    export(presets.cube_grid().with_frame([]), grid)
+    write(presets.cube_grid().with_frame([]), grid)
     done = _interlock("view", grid, "--fixed", "0-3,5-8", "--order", "2", "-o", tmp_path / "v.html", cwd=tmp_path)
     assert done.returncode == 0, done.stderr
     assert "wrote" in done.stdout and "finite motion shown" in done.stdout
@@ -236,9 +234,7 @@ def test_cli_view_writes_the_file_and_refuses_bad_input(tmp_path):
 
 
 def test_cli_view_with_stability(tmp_path):
-    from interlock.gallery import export
-
-    export(_stack(1.5), tmp_path / "stack.glb")
+    write(_stack(1.5), tmp_path / "stack.glb")
     done = _interlock("view", "stack.glb", "--stability", "--mu", "0.5", "-o", "stack.html", cwd=tmp_path)
     assert done.returncode == 0, done.stderr
     assert "RBE stable" in done.stdout and (tmp_path / "stack.html").is_file()

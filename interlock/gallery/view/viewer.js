@@ -46,6 +46,8 @@
   }
 
   var SELECTED = new THREE.Color('#ffd400');
+  // above this many blocks the edges are not smoothed (multisampling): without a GPU it doubles the first frame
+  var SMOOTH_BLOCKS = 2000;
 
   function forceColour(share, target) {  // blue (small) -> orange -> red (largest)
     var stops = [[0.2, 0.35, 0.85], [0.95, 0.6, 0.1], [0.85, 0.1, 0.1]];
@@ -82,7 +84,8 @@
       this.failed = true;
       return;
     }
-    var renderer = this.renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
+    var renderer = this.renderer = new THREE.WebGLRenderer({ antialias: data.blocks.count <= SMOOTH_BLOCKS,
+                                                              preserveDrawingBuffer: true });
     renderer.setPixelRatio(Math.min(window.devicePixelRatio || 1, 2));
     renderer.setClearColor(0xf4f5f7, 1);
     stage.appendChild(renderer.domElement);
@@ -516,6 +519,7 @@
     if (this.failed || this.disposed) return;
     this.renderer.render(this.scene, this.camera);
     this.frames++;
+    if (registry.firstFrame === undefined) registry.firstFrame = performance.now();  // ms since the page began
   };
 
   View.prototype.stats = function () {
@@ -553,9 +557,16 @@
     return JSON.parse(source.textContent);
   }
 
+  function shown() {  // two animation frames after the first render: the picture has reached the screen
+    requestAnimationFrame(function () {
+      requestAnimationFrame(function () { if (registry.shown === undefined) registry.shown = performance.now(); });
+    });
+  }
+
   function mountAll() {  // every .iv-viewer at once (a single view)
     document.querySelectorAll('.iv-viewer').forEach(function (container) { mount(container, sceneOf(container)); });
     registry.ready = true;
+    shown();
   }
 
   function mountLazily(live) {  // the gallery: a view when its entry scrolls near, at most `live` at a time
@@ -569,6 +580,7 @@
         if (mounted.has(container)) return;
         mounted.set(container, mount(container, sceneOf(container)));
         registry.mounted++;
+        shown();
         container.classList.add('iv-live');
       });
       Array.from(mounted.keys()).forEach(function (container) {  // the oldest out of sight go first
