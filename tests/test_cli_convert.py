@@ -72,4 +72,4 @@ def test_labels_survive_every_labelled_format_and_the_others_say_they_drop_them(
         assert "labels not kept" not in capsys.readouterr().out
     assert read(tmp_path / "last.json").labels == hexagon.labels
     assert main(["convert", str(source), str(tmp_path / "flat.stl")]) == 0
-    assert "labels not kept (.stl stores none: use .obj, .ply, .glb, .3mf, .3dm, .json)" in capsys.readouterr().out
+    assert "labels not kept (.stl stores none: use .obj, .ply, .off, .glb, .3mf, .3dm, .json)" in capsys.readouterr().out
