@@ -130,14 +130,16 @@ def _held_temporary(path: Path) -> tuple[int, Path]:
 
 
 def _lock(descriptor: int, wait: bool) -> bool:
-    """An exclusive ``flock`` on an open file; False if another holds it (``wait=False``).  True without fcntl."""
+    """An exclusive ``flock`` on an open file; False if another holds it (``wait=False``) or the file system
+    cannot lock (some network mounts: then no file is taken for stale).  True without fcntl (Windows, where an
+    open file cannot be removed, which protects it instead)."""
     try:
         import fcntl
-    except ImportError:  # Windows: an open file cannot be removed there, which protects it instead
+    except ImportError:
         return True
     try:
         fcntl.flock(descriptor, fcntl.LOCK_EX | (0 if wait else fcntl.LOCK_NB))
-    except BlockingIOError:
+    except OSError:  # BlockingIOError: held by a running write; ENOLCK and others: no locks here
         return False
     return True
 
