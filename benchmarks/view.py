@@ -40,14 +40,14 @@ def _browser():
     from selenium import webdriver
     from selenium.webdriver.chrome.service import Service
 
-    from tests.gallery.browser import CHROMIUM, DRIVER, FLAGS, _first
+    from tests.gallery.browser import CHROMIUM, DRIVER, FLAGS, first_found
 
     options = webdriver.ChromeOptions()
-    options.binary_location = _first(CHROMIUM)
+    options.binary_location = first_found(CHROMIUM)
     for flag in FLAGS:
         options.add_argument(flag)
     options.set_capability("goog:loggingPrefs", {"browser": "ALL"})
-    return webdriver.Chrome(service=Service(_first(DRIVER)), options=options)
+    return webdriver.Chrome(service=Service(first_found(DRIVER)), options=options)
 
 
 def _load(driver, path: Path) -> tuple[float, float]:

@@ -27,7 +27,8 @@ body { font: 15px/1.45 system-ui, sans-serif; margin: 0; color: #222; background
 @media (min-width: 1000px) { .layout { grid-template-columns: 250px minmax(0, 1fr); gap: 24px; }
   .toc { position: sticky; top: 0; max-height: 100vh; overflow-y: auto; } }
 .toc { padding: 12px 0; font-size: 13.5px; } .toc ol { padding-left: 2.1em; margin: 0.3em 0; }
-.toc li { margin: 0.25em 0; } .toc a { color: #1a4d8f; text-decoration: none; } .toc a:hover { text-decoration: underline; }
+.toc li { margin: 0.25em 0; } .toc a { color: #1a4d8f; text-decoration: none; }
+.toc a:hover { text-decoration: underline; }
 h1 { margin: 0.6em 0 0.2em; } .lead { color: #555; margin-top: 0; }
 .legend { background: white; border: 1px solid #ddd; border-radius: 8px; padding: 0.6em 1em; margin: 1em 0; }
 .legend .row { display: inline-flex; align-items: center; gap: 6px; margin: 2px 14px 2px 0; }
@@ -145,7 +146,8 @@ def _entry_html(result) -> str:
         rows.append(f"<tr><th>beyond first order</th><td>{word} — {e(r['beyond']['status'])}</td></tr>")
     for key, label in (("periodic", "infinite (periodic)"), ("periodic_translational", "infinite, translations")):
         if r.get(key):
-            rows.append(f"<tr><th>{label}</th><td>{_verdict_word(r[key]['status'])} — {e(r[key]['reason'])}</td></tr>")
+            word = _verdict_word(r[key]["status"])
+            rows.append(f"<tr><th>{label}</th><td>{word} — {e(r[key]['reason'])}</td></tr>")
     if r.get("criterion_4_3"):
         holds = r["criterion_4_3"]["holds"]
         rows.append(f"<tr><th>Criterion 4.3</th><td>{'holds' if holds else 'fails'}</td></tr>")

@@ -23,7 +23,7 @@ FLAGS = ("--headless=new", "--no-sandbox", "--disable-dev-shm-usage", "--use-ang
 POLLS = 3000
 
 
-def _first(names) -> str | None:
+def first_found(names) -> str | None:
     return next((found for found in map(shutil.which, names) if found), None)
 
 
@@ -38,7 +38,7 @@ def launch():
         from selenium.webdriver.chrome.service import Service
     except ImportError:
         _missing("selenium is not installed (pip install -e '.[test]')")
-    browser, driver = _first(CHROMIUM), _first(DRIVER)
+    browser, driver = first_found(CHROMIUM), first_found(DRIVER)
     if browser is None or driver is None:
         _missing("Debian's chromium and chromium-driver are not installed (apt-get install chromium chromium-driver)")
     options = webdriver.ChromeOptions()

@@ -82,6 +82,28 @@ def test_example_3_5_view_plays_block_4_moving_up(driver, tmp_path):
     _clean(page)
 
 
+def test_blocks_read_from_a_file_share_one_geometry_and_still_move(driver, tmp_path):
+    """A file gives each block its own mesh in world coordinates; translates share one geometry again."""
+    loose = Assembly.from_meshes(presets.cube_grid().world_meshes(), frame=presets.cube_grid().frame)
+    data = scene(loose, check(loose, order=2))
+    assert len(data["geometries"]) == 1 and data["motion"]["moving"] == [4]
+    page = _open(driver, write_view(loose, tmp_path / "loose.html", check(loose, order=2)))
+    assert page.js("return window.interlock.views[0].stats().meshes") == 1
+    start = page.js("window.interlock.views[0].setMotion(0); return window.interlock.views[0].blockCentre(4)")
+    end = page.js("window.interlock.views[0].setMotion(1); return window.interlock.views[0].blockCentre(4)")
+    assert start == pytest.approx([0, 0, 0], abs=1e-5)  # the middle of the grid, which the view centres
+    assert end[2] - start[2] > 0.5 and end[:2] == pytest.approx(start[:2], abs=1e-5)  # straight up
+    _clean(page)
+
+
+def test_a_verdict_of_another_assembly_is_refused(tmp_path):
+    grid = presets.cube_grid()
+    with pytest.raises(GalleryError, match="give the assembly it was computed for"):
+        write_view(presets.interlocking_cubes().with_frame([0]), tmp_path / "v.html",
+                   check(rhomblock_assembly(random_hexagon(2, 2, 2, seed=0), 0, frame="boundary")))
+    assert write_view(grid, tmp_path / "ok.html", check(grid)).is_file()
+
+
 def test_play_moves_the_block_by_itself(driver, tmp_path):
     grid = presets.cube_grid()
     page = _open(driver, write_view(grid, tmp_path / "first.html", check(grid)))

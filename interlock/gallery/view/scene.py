@@ -17,7 +17,7 @@ from interlock.verify.contacts import contacts as find_contacts
 from interlock.verify.motion import twist_exponential
 
 __all__ = ["scene", "MOTION_STEPS", "FIRST_ORDER_REACH", "TURN_REACH", "FRAME_COLOUR", "MOVING_COLOUR",
-           "SCENE_VERSION", "CLASS_WORDS", "MOTION_START"]
+           "SCENE_VERSION", "CLASS_WORDS", "MOTION_START", "shared_geometry", "SHARE_RTOL"]
 
 #: The format of the scene the page's script reads; raised when its keys change.
 SCENE_VERSION = 1
@@ -28,6 +28,9 @@ MOTION_STEPS = 32
 FIRST_ORDER_REACH = 0.8
 #: ... or until some block has turned this many radians, whichever comes first.
 TURN_REACH = math.pi / 6
+#: Meshes share a geometry when their vertices, less their mean, agree within this share of the mesh's size
+#: (float32 files round at 6e-8 of a coordinate; a difference of 1e-6 of a block is not seen).
+SHARE_RTOL = 1e-6
 #: How the legend names the classes of :func:`~interlock.blocks.classes.block_classes`.
 CLASS_WORDS = {"coset": "coset", "orientation": "lozenge orientation", "cell block": "cell block",
                "type": "block shape"}
@@ -86,6 +89,7 @@ def scene(obj, verdict=None, stability=None, *, title: str | None = None, contac
     if len(assembly) == 0:
         raise GalleryError("the assembly has no blocks: there is nothing to view")
     frame = tuple(int(b) for b in (verdict.frame if verdict is not None else assembly.frame))
+    _check_matches(assembly, verdict, stability, frame)
     if contacts is None and verdict is not None:
         contacts = find_contacts(assembly)
     bounds = assembly.bounds
@@ -93,10 +97,11 @@ def scene(obj, verdict=None, stability=None, *, title: str | None = None, contac
     offset = (low + high) / 2
     shift = np.eye(4)
     shift[:3, 3] = -offset
-    placements = shift @ assembly.transforms
+    geometries, types, local = shared_geometry(assembly)
+    placements = shift @ local
     classes, kind = block_classes(assembly)
     names = [f"{CLASS_WORDS.get(kind, kind)} {k}" for k in range(int(classes.max()) + 1)]
-    motion = _motion(assembly, verdict, stability, shift)
+    motion = _motion(assembly, verdict, stability, shift, local)
     return {
         "version": SCENE_VERSION,
         "title": title or str(assembly.info.get("name") or f"{len(assembly)} blocks"),
@@ -106,10 +111,10 @@ def scene(obj, verdict=None, stability=None, *, title: str | None = None, contac
         "size": float(np.linalg.norm(high - low)) or 1.0,
         "block_size": float(assembly.block_size),
         "up": [0.0, 0.0, 1.0],
-        "geometries": [{"position": _floats(m.vertices), "index": _uints(m.faces)} for m in assembly.meshes],
+        "geometries": [{"position": _floats(v), "index": _uints(f)} for v, f in geometries],
         "blocks": {
             "count": len(assembly),
-            "type": [int(t) for t in assembly.types],
+            "type": [int(t) for t in types],
             "matrix": _floats(placements.transpose(0, 2, 1)),  # column-major, as three.js's Matrix4.fromArray
             "class": [int(c) for c in classes],
             "label": [_label(label, k) for k, label in enumerate(assembly.labels)],
@@ -126,34 +131,83 @@ def scene(obj, verdict=None, stability=None, *, title: str | None = None, contac
     }
 
 
+def shared_geometry(assembly: Assembly) -> tuple[list, np.ndarray, np.ndarray]:
+    """One geometry per set of meshes that are translates of one another, and each block's placement of it.
+
+    A file read back (STL, OBJ, GLB, ...) gives every block a mesh of its own,
+    in world coordinates; congruent blocks placed by translations (RhomBlocks of
+    one orientation, Escher blocks of one coset) then share a geometry again:
+    meshes with the same faces whose vertices, less their mean, agree within
+    :data:`SHARE_RTOL` of the mesh's size.  Returns ``(geometries, types,
+    placements)``: ``(vertices, faces)`` per geometry (vertices about their
+    mean), the geometry of each block, and its (n, 4, 4) world placement.
+
+    >>> from interlock.blocks import Assembly, presets
+    >>> grid = presets.cube_grid()
+    >>> loose = Assembly.from_meshes(grid.world_meshes())  # nine meshes, as a file gives them
+    >>> geometries, types, placements = shared_geometry(loose)
+    >>> len(loose.meshes), len(geometries), types.tolist()
+    (9, 1, [0, 0, 0, 0, 0, 0, 0, 0, 0])
+    """
+    groups, geometries, of_mesh, centres = {}, [], [], []
+    for mesh in assembly.meshes:
+        vertices = np.asarray(mesh.vertices, dtype=float)
+        centre = vertices.mean(axis=0) if len(vertices) else np.zeros(3)
+        about = vertices - centre
+        size = float(np.abs(about).max(initial=0.0)) or 1.0
+        key = (np.asarray(mesh.faces).tobytes(), np.round(about / (SHARE_RTOL * size)).astype(np.int64).tobytes())
+        if key not in groups:
+            groups[key] = len(geometries)
+            geometries.append((about, np.asarray(mesh.faces)))
+        of_mesh.append(groups[key])
+        centres.append(centre)
+    move = np.tile(np.eye(4), (len(centres), 1, 1))
+    move[:, :3, 3] = centres
+    types = np.asarray(of_mesh, dtype=int)[assembly.types]
+    return geometries, types, assembly.transforms @ move[assembly.types]
+
+
+def _check_matches(assembly: Assembly, verdict, stability, frame) -> None:
+    """A verdict or stability result of another assembly (other blocks) is refused, saying so."""
+    n = len(assembly)
+    motion = getattr(verdict, "motion", None)
+    used = [*frame, *getattr(verdict, "moving", ())]
+    if stability is not None:
+        used += [b for c in stability.contacts for b in (c.i, c.j)] + list(stability.parameters.get("frame") or ())
+    if (motion is not None and len(motion) != n) or any(not 0 <= int(b) < n for b in used):
+        raise GalleryError(f"the verdict or stability result names blocks this assembly of {n} blocks does not have: "
+                           "give the assembly it was computed for")
+
+
 # --- the motion ---------------------------------------------------------------------------------
 
 
-def _motion(assembly: Assembly, verdict, stability, shift) -> dict | None:
+def _motion(assembly: Assembly, verdict, stability, shift, local) -> dict | None:
     """The moving blocks' placements along the motion to show, or None."""
     finite = getattr(verdict, "finite_motion", None)
     if finite is not None and getattr(finite, "shown", False) and finite.path is not None:
         last = finite.parameters[-1] if finite.parameters else finite.start
         steps = np.linspace(finite.start, last, MOTION_STEPS)
         moving = [int(b) for b in finite.moving]
-        return _sampled(assembly, finite.path, steps, moving, shift, "finite",
+        return _sampled(finite.path, steps, moving, shift, local, "finite",
                         f"the finite motion shown ({finite.ending}), from its start to its last step")
     if verdict is not None and verdict.motion is not None and verdict.moving and verdict.interlocked is not True:
-        return _twist(assembly, np.asarray(verdict.motion, dtype=float), verdict.moving, shift, "first-order",
+        twists = np.asarray(verdict.motion, dtype=float)
+        return _twist(assembly, twists, verdict.moving, (shift, local), "first-order",
                       "the first-order motion (a direction the contacts allow; not shown to be a finite motion)")
     if stability is not None and stability.stable is False:
         twists = collapse_twists(assembly, stability)
         if twists is not None:
             moving = np.flatnonzero(np.abs(twists).max(axis=1) > 1e-9 * np.abs(twists).max())
-            return _twist(assembly, twists, moving, shift, "collapse",
+            return _twist(assembly, twists, moving, (shift, local), "collapse",
                           "a collapse mechanism: the blocks move so that every contact opens or slides within its "
                           "friction cone while their weight does work (why no forces can carry it)")
     return None
 
 
-def _twist(assembly: Assembly, twists: np.ndarray, moving, shift, kind: str, caption: str) -> dict:
+def _twist(assembly: Assembly, twists: np.ndarray, moving, placements, kind: str, caption: str) -> dict:
     """A twist drawn until a vertex has moved :data:`FIRST_ORDER_REACH` block sizes or a block turned
-    :data:`TURN_REACH`."""
+    :data:`TURN_REACH`; ``placements`` is ``(shift, world)`` of :func:`_sampled`."""
     moving = [int(b) for b in moving]
     corners = assembly.bounds[moving]  # (m, 2, 3): the moving blocks' boxes bound their vertices' speeds
     reach = np.linalg.norm(corners[:, 1] - corners[:, 0], axis=1) / 2
@@ -169,11 +223,13 @@ def _twist(assembly: Assembly, twists: np.ndarray, moving, shift, kind: str, cap
     if turn > 0:
         end = min(end, TURN_REACH / turn)
     path = lambda s: twist_exponential(twists, assembly.centroids, s)  # noqa: E731
-    return _sampled(assembly, path, np.linspace(0.0, end, MOTION_STEPS), moving, shift, kind, caption)
+    return _sampled(path, np.linspace(0.0, end, MOTION_STEPS), moving, *placements, kind, caption)
 
 
-def _sampled(assembly: Assembly, path, steps, moving, shift, kind: str, caption: str) -> dict:
-    matrices = np.stack([shift @ path(float(s))[moving] @ assembly.transforms[moving] for s in steps])
+def _sampled(path, steps, moving, shift, world, kind: str, caption: str) -> dict:
+    """The moving blocks' placements at each step: ``shift @ path(s) @ world`` (``world``: the placements of the
+    shared geometries; the world motion ``path(s)`` acts before the shift to the view's centre)."""
+    matrices = np.stack([shift @ path(float(s))[moving] @ world[moving] for s in steps])
     return {"kind": kind, "caption": caption, "moving": moving, "steps": len(steps), "start_at": MOTION_START,
             "parameters": [float(f"{s:.6g}") for s in steps],
             "matrices": _floats(matrices.transpose(0, 1, 3, 2))}

@@ -369,7 +369,8 @@
     });
     this.frameShown = true;
     this.pickButton = button('Pick frame', 'click blocks to add them to the frame or take them out; the matching '
-                             + '--fixed list is shown to copy', function () { self.setPickingFrame(!self.pickingFrame); });
+                             + '--fixed list is shown to copy',
+                             function () { self.setPickingFrame(!self.pickingFrame); });
     if (data.motion) {
       this.playButton = button('Play', 'play or pause the motion', function () { self.play(); });
       var slider = this.slider = element('input', 'iv-slider');
