@@ -259,10 +259,14 @@ def _writer(path: Path, resume: bool):
         raise SweepError(f"cannot write {path}: a Parquet output is a folder, and this is a file")
     if os.path.islink(path):  # resume the file it names (writing would replace the link by a file)
         try:
-            path = path.resolve(strict=True)
+            target = path.resolve(strict=True)
         except (OSError, RuntimeError):  # missing, or a loop
             raise SweepError(f"cannot write {path}: it is a symbolic link to nothing that exists (or a loop); "
                              "give the file itself") from None
+        if target.suffix != path.suffix:
+            raise SweepError(f"cannot write {path}: it is a symbolic link to {target}, which does not end in "
+                             f"{path.suffix}; give the file itself")
+        path = target
     if path.exists() and not resume:
         raise SweepError(f"{path} exists: resume it (--resume) or choose another output")
     if path.exists():

@@ -558,6 +558,12 @@ def test_an_empty_file_and_a_link_to_a_sweeps_output_are_resumed(tmp_path):
     loop.symlink_to(loop)
     with pytest.raises(SweepError, match="symbolic link to nothing"):
         _threads(SMALL, output=loop, resume=True)
+    renamed, other = tmp_path / "renamed.txt", tmp_path / "other.jsonl"
+    renamed.write_bytes(real.read_bytes())
+    other.symlink_to(renamed)
+    with pytest.raises(SweepError, match="which does not end in .jsonl"):
+        _threads(SMALL, output=other, resume=True)
+    assert renamed.read_bytes() == real.read_bytes()
 
 
 @pytest.mark.parametrize("edge, message", [
