@@ -611,11 +611,11 @@ def test_workers_end_when_the_sweep_is_killed_with_sigkill(tmp_path):
     workers = []
     try:
         for _ in range(TRIES):  # until both workers run and records arrive
-            workers = [child.pid for child in psutil.Process(process.pid).children()]
+            workers = [child.pid for child in psutil.Process(process.pid).children(recursive=True)]  # forkserver too
             if len(workers) >= 2 and out.exists() and out.read_text().count("\n") >= 3:
                 break
             time.sleep(PAUSE)
-        assert len(workers) == 2, "the sweep should run two workers"
+        assert len(workers) >= 2, "the sweep should run two workers"
         os.kill(process.pid, signal.SIGKILL)  # the sweep alone, not its process group
         process.wait()
         for _ in range(TRIES):
