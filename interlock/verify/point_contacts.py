@@ -460,7 +460,11 @@ def _vertex_face(table, every: _Everything, search, reach, paired, count, keys):
 
 
 def _unimplied(found, faces, search):
-    """The touches of ``found`` that lie farther than their tolerance from every face contact of their pair."""
+    """The touches of ``found`` that lie farther than their tolerance from every face contact of their pair.
+
+    The tolerance is the pair's search distance, or the face contact's own where that is larger (its
+    :attr:`~interlock.blocks.contact.Contact.tolerance`, its bend and gap): a face bent within the tolerances
+    is modelled as one plane, and the corners of its halves are that face's, not contacts of their own."""
     by_pair = {}
     for k, c in enumerate(faces):
         by_pair.setdefault((c.i, c.j), []).append(k)
@@ -474,6 +478,9 @@ def _unimplied(found, faces, search):
     tests_t, tests_f = np.array(tests_t), np.array(tests_f)
     points = np.array([item[3] for item in found])[tests_t]
     tol = np.array([search[item[0]] + search[item[1]] for item in found])[tests_t]
+    # a face contact stands for its faces within its own tolerance (a bend it merged, a gap it bridges)
+    tol = np.maximum(tol, np.array([max(faces[k].tolerance or 0.0, faces[k].deviation + faces[k].separation)
+                                    for k in tests_f]))
     origins = np.array([faces[k].origin for k in tests_f])
     normals = np.array([faces[k].normal for k in tests_f])
     bases = np.array([faces[k].basis for k in tests_f])
