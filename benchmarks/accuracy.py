@@ -398,6 +398,7 @@ def run(quick: bool = False) -> dict:
                "composition": composition(cases, studies), "methods": summary, "wrong": wrong,
                "seconds": time.perf_counter() - start,
                "notable": notable(studies, cases)}
+    payload["edge_contact"] = run_edge_contacts(quick)
     _report(summary, wrong, payload)
     write_json("accuracy", payload)
     _chart(summary, len(cases), payload["labelled"], settings, sum(c.deep for c in cases))
@@ -470,3 +471,168 @@ def _chart(summary: dict, assemblies: int, labelled: dict, settings: Settings, d
 
 if __name__ == "__main__":
     main(run, __doc__)
+
+
+# --- the edge-contact family (issue 38): finite assemblies held by edges and corners ----------------------
+#
+# Blocks that touch along edges and at corners (main paper Remark 3.11): the tetrahedra layers of Fig. 5, the
+# tetrahedral-octahedral honeycomb layer, and one tetrahedron held by seven edge-edge contacts only.  Labels,
+# again only from what is proven:
+#     * Fig. 5a with its red frame: "interlocked" (the main paper, [11, 6]);
+#     * the held tetrahedron: "interlocked" by its seven rows written out in numpy (a positive stress on rows of
+#       rank 6, Stiemke's lemma), independent of the package;
+#     * "not interlocked" where the verdict's motion is a translation of each moving block that manifold3d finds
+#       free of overlap at five distances up to the model size (checked here, not by the package);
+#     * "interlocked" where ``check(..., certify=True)`` certifies it (an exact positive self-stress on the
+#       rows of every contact type);
+#     * anything else unlabelled.
+# Methods: ``check`` with every contact type (the default), with ``contacts="faces"`` (Def. 3.3 alone), and the
+# default at ``order=2``.
+
+#: Radii of the tetrahedra layers (lattice units) and of the honeycomb layer (edge lengths).
+EDGE_TETRAHEDRA_RADII = (1.0, 1.5, 2.0, 2.5)
+EDGE_HONEYCOMB_RADII = (1.0, 1.5, 2.0, 3.0)
+#: The held tetrahedron: (axis, side, s) of each small holder (tests/verify/test_point_contacts.py).
+HELD_TETRAHEDRON = ((0, 1, -0.45), (0, -1, 0.03), (1, 1, 0.39), (1, -1, -0.46), (2, 1, 0.35), (2, -1, 0.31),
+                    (0, 1, 0.44))
+#: A translation witness: distances (fractions of the model size) and the overlap allowed (of the smaller block).
+WITNESS_STEPS = (1e-3, 1e-2, 0.1, 0.3, 1.0)
+WITNESS_OVERLAP = 1e-6
+EDGE_METHODS = ("all types", "faces only", "all types, order 2")
+
+
+def edge_contact_cases(quick: bool = False) -> list[dict]:
+    """The family's assemblies: name, how to rebuild it, and a label fixed in advance (or None)."""
+    from interlock.blocks import presets
+
+    radii = EDGE_TETRAHEDRA_RADII[:2] if quick else EDGE_TETRAHEDRA_RADII
+    cases = []
+    for r in radii:
+        cases.append({"name": f"tetrahedra p4 r={r} red frame", "build": lambda r=r: presets.tetrahedra("p4", r),
+                      "reproduce": f"presets.tetrahedra('p4', {r})", "label": INTERLOCKED,
+                      "source": "main paper Fig. 5a (red frame)"})
+        for group in ("p4", "p3", "p6"):
+            cases.append({"name": f"tetrahedra {group} r={r} ring", "reproduce":
+                          f"presets.tetrahedra({group!r}, {r}, frame='boundary')",
+                          "build": lambda r=r, g=group: presets.tetrahedra(g, r, frame="boundary"), "label": None})
+    for r in (EDGE_HONEYCOMB_RADII[:2] if quick else EDGE_HONEYCOMB_RADII):
+        cases.append({"name": f"honeycomb r={r} ring", "build": lambda r=r: presets.honeycomb_layer(r),
+                      "reproduce": f"presets.honeycomb_layer({r})", "label": None})
+    held, stress_ok = _held_tetrahedron(HELD_TETRAHEDRON)
+    cases.append({"name": "tetrahedron held by 7 edges", "build": lambda: held, "reproduce": "HELD_TETRAHEDRON",
+                  "label": INTERLOCKED if stress_ok else None,
+                  "source": "rows written out in numpy: a positive stress on 7 rows of rank 6"})
+    for k in range(len(HELD_TETRAHEDRON)):
+        fewer = HELD_TETRAHEDRON[:k] + HELD_TETRAHEDRON[k + 1:]
+        cases.append({"name": f"tetrahedron held by 6 edges (holder {k} removed)",
+                      "build": lambda fewer=fewer: _held_tetrahedron(fewer)[0],
+                      "reproduce": f"HELD_TETRAHEDRON without holder {k}", "label": None})
+    return cases
+
+
+def run_edge_contacts(quick: bool = False) -> dict:
+    """The edge-contact family: every method on every case, labels, scores; writes accuracy_edge_contacts.json."""
+    rows = []
+    for case in edge_contact_cases(quick):
+        assembly = case["build"]()
+        verdicts = {}
+        for method in EDGE_METHODS:
+            kwargs = {"contacts": "faces"} if method == "faces only" else {}
+            if method.endswith("order 2"):
+                kwargs["order"] = 2
+            verdict, seconds = _timed(lambda: check(assembly, **kwargs))
+            verdicts[method] = (verdict, seconds)
+        truth, source = case["label"], case.get("source", "unlabelled")
+        if truth is None:
+            truth, source = _edge_label(assembly, verdicts["all types"][0])
+        rows.append({"case": case["name"], "reproduce": case["reproduce"], "blocks": len(assembly),
+                     "label": truth, "source": source,
+                     "verdicts": [{"method": m, "verdict": _from_bool(v.interlocked), "seconds": t,
+                                   "score": score(_from_bool(v.interlocked), truth), "status": str(v)[:300]}
+                                  for m, (v, t) in verdicts.items()]})
+    summary = {}
+    for method in EDGE_METHODS:
+        scores = [v["score"] for r in rows for v in r["verdicts"] if v["method"] == method]
+        summary[method] = {name: scores.count(name) for name in ("correct", "wrong", INCONCLUSIVE)}
+        summary[method]["unlabelled"] = scores.count(None)
+        summary[method]["median_seconds"] = statistics.median(v["seconds"] for r in rows for v in r["verdicts"]
+                                                              if v["method"] == method)
+    for method, row in summary.items():
+        print(f"edge-contact {method:20s}: {row['correct']} correct, {row['wrong']} wrong, "
+              f"{row[INCONCLUSIVE]} inconclusive, {row['unlabelled']} unlabelled, median "
+              f"{1000 * row['median_seconds']:.0f} ms")
+    wrong = [dict(r, verdicts=[v for v in r["verdicts"] if v["score"] == "wrong"]) for r in rows
+             if any(v["score"] == "wrong" for v in r["verdicts"])]
+    payload = {"family": "edge-contact", "quick": quick, "cases": rows, "summary": summary,
+               "wrong": [{"case": r["case"], "methods": [v["method"] for v in r["verdicts"]]} for r in wrong]}
+    write_json("accuracy_edge_contacts" + ("_quick" if quick else ""), payload)
+    return {"summary": summary, "cases": len(rows)}
+
+
+def _edge_label(assembly, verdict) -> tuple[str | None, str]:
+    """A label proven here: a translation witness checked by booleans, or the certified verdict; else none."""
+    if verdict.interlocked is False and verdict.motion is not None and _translation_witness(assembly, verdict.motion):
+        return NOT_INTERLOCKED, "a translation of the moving blocks, free of overlap at 5 distances (manifold3d)"
+    certified = check(assembly, certify=True)
+    if certified.interlocked is True and certified.certified:
+        return INTERLOCKED, "certified verdict with every contact type (exact positive self-stress)"
+    return None, "unlabelled"
+
+
+def _translation_witness(assembly, motion) -> bool:
+    """Whether moving each block by ``s t_b`` (no turn) keeps every pair apart, for the steps of WITNESS_STEPS."""
+    import manifold3d
+
+    motion = np.asarray(motion, dtype=float)
+    if np.abs(motion[:, :3]).max() > 1e-12 or not np.abs(motion[:, 3:]).max() > 0:
+        return False
+    size = assembly.scale / float(np.abs(motion[:, 3:]).max())
+    meshes = assembly.world_meshes()
+
+    def solid(mesh, shift):
+        return manifold3d.Manifold(manifold3d.Mesh(np.asarray(mesh.vertices + shift, np.float32),
+                                                   np.asarray(mesh.faces, np.uint32)))
+
+    moving = np.flatnonzero(np.abs(motion[:, 3:]).max(axis=1) > 0)
+    for step in WITNESS_STEPS:
+        solids = [solid(m, step * size * motion[b, 3:]) for b, m in enumerate(meshes)]
+        for i in moving:
+            for j in range(len(meshes)):
+                if j == i or (j in moving and j < i):
+                    continue
+                volume = (solids[i] ^ solids[j]).volume()
+                if volume > WITNESS_OVERLAP * min(meshes[i].volume, meshes[j].volume):
+                    return False
+    return True
+
+
+def _held_tetrahedron(holders):
+    """The regular tetrahedron of the cube [-1, 1]^3 and small fixed tetrahedra whose edges cross its edges; and
+    whether its rows, written out here, admit a positive stress with rank 6 (so that it is interlocked)."""
+    import trimesh
+
+    from interlock.blocks import Assembly
+
+    corners = np.array([(1, 1, 1), (1, -1, -1), (-1, 1, -1), (-1, -1, 1)], dtype=float)
+    faces = [(1, 2, 3), (0, 2, 3), (0, 1, 3), (0, 1, 2)]
+
+    def outward(vertices):
+        out = []
+        for face in faces:
+            a, b, c = vertices[list(face)]
+            other = vertices[[k for k in range(4) if k not in face][0]]
+            out.append(face if np.cross(b - a, c - a) @ (a - other) > 0 else face[::-1])
+        return trimesh.Trimesh(vertices, out, process=False)
+
+    meshes, rows = [outward(corners.copy())], []
+    for axis, side, s in holders:
+        centre = np.array([1.3, s - 0.1, s + 0.1] if side > 0 else [-1.3, s - 0.1, -s - 0.1])
+        turn = np.roll(np.eye(3), axis, axis=0)
+        meshes.append(outward((corners * 0.3 + centre) @ turn.T))
+        point = turn @ (np.array([1, s, s]) if side > 0 else np.array([-1, s, -s]))
+        normal = turn @ np.array([-side, 0.0, 0.0])
+        rows.append(np.r_[np.cross(point, normal), normal])  # the held block's row at the crossing
+    A = np.array(rows)
+    stress = np.linalg.svd(A.T)[2][-1]
+    positive = np.linalg.matrix_rank(A) == 6 and len(A) > 6 and (np.all(stress > 0) or np.all(stress < 0))
+    return Assembly.from_meshes(meshes, frame=list(range(1, len(meshes)))), bool(positive)
