@@ -392,8 +392,11 @@ def _edge_edge(every: _Everything, search, reach, paired, angle):
     size = np.linalg.norm(cross, axis=1)
     lu, lw = 2 * every.half[a], 2 * every.half[b]
     tol = search[every.edge_block[a]] + search[every.edge_block[b]]
-    # not parallel: over the shorter edge the lines part by more than the tolerance, and by more than the angle
-    transverse = size > np.maximum(np.sin(angle), tol / np.maximum(np.minimum(lu, lw), 1e-300)) * lu * lw
+    # not parallel: the angle between the edges is above the angle tolerance, and so large that moving their ends
+    # by the tolerance turns e_i x e_j by at most CONE_ANGLE (tol / (l sin theta) <= CONE_ANGLE); crossings at
+    # smaller angles are no edge-edge contact (fewer rows: never a motion wrongly blocked)
+    shortest = np.maximum(np.minimum(lu, lw), 1e-300)
+    transverse = size > np.maximum(np.sin(angle), tol / (CONE_ANGLE * shortest)) * lu * lw
     a, b, pa, pb, u, w, cross, size, lu, lw, tol = (x[transverse] for x in (a, b, pa, pb, u, w, cross, size, lu, lw,
                                                                             tol))
     d = pb - pa
