@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import ctypes
 import json
-import multiprocessing
 import os
 import signal
 import sys
@@ -132,10 +131,8 @@ def run(spec, output=None, executor=None, workers: int | None = None, resume: bo
         done = {}
     owned = executor is None
     if owned:
-        context = multiprocessing.get_context()
-        parent = os.getpid() if context.get_start_method() in ("fork", "spawn") else None  # forkserver: its child
-        executor = ProcessPoolExecutor(max_workers=workers or os.cpu_count(), mp_context=context,
-                                       initializer=die_with_parent, initargs=(parent,))
+        executor = ProcessPoolExecutor(max_workers=workers or os.cpu_count(), initializer=die_with_parent,
+                                       initargs=(os.getpid(),))
     elif hasattr(executor, "get_executor"):  # a dask.distributed.Client
         executor = executor.get_executor()
     elif not isinstance(executor, Executor):
@@ -171,34 +168,51 @@ def run(spec, output=None, executor=None, workers: int | None = None, resume: bo
     return [done[i] for i in sorted(done)]
 
 
-def die_with_parent(parent: int | None = None) -> None:
-    """End this process when its parent ends, however that ends (``kill -9`` too): the local workers' initializer.
+def die_with_parent(sweep: int | None = None) -> None:
+    """End this process when the sweep's process ``sweep`` ends, however it ends (``kill -9`` too): the local
+    workers' initializer.
 
-    On Linux the kernel sends this process SIGKILL when its parent dies (``prctl(PR_SET_PDEATHSIG)``, through
-    ctypes); if the parent was already gone when that was asked for (its pid is not ``parent`` any more), the
-    process ends at once.  Elsewhere a daemon thread looks every :data:`PARENT_POLL_SECONDS` whether the parent
-    changed (the orphan is adopted by another process) and ends the process when it did.  A worker so ended
-    leaves nothing behind: its chunk's records were not written, and a resumed sweep computes them.
+    Where that process is this one's parent (the ``fork`` and ``spawn`` start methods) on Linux, the kernel
+    sends this process SIGKILL when the parent dies (``prctl(PR_SET_PDEATHSIG)``, through ctypes); if the
+    parent was already gone when that was asked for, the process ends at once.  Otherwise (another system,
+    or workers started by a ``forkserver``) a daemon thread looks every :data:`PARENT_POLL_SECONDS` whether
+    the sweep's process still exists and ends this one when it does not.  A worker so ended leaves nothing
+    behind: its chunk's records were not written, and a resumed sweep computes them.
     """
-    if parent is None:
-        parent = os.getppid()
-    if sys.platform.startswith("linux"):
+    if sweep is None:
+        sweep = os.getppid()
+    if sys.platform.startswith("linux") and os.getppid() == sweep:
         try:
             libc = ctypes.CDLL(None, use_errno=True)
             asked = libc.prctl(_PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0) == 0
         except (OSError, AttributeError):
             asked = False
         if asked:
-            if os.getppid() != parent:  # the parent died before the signal was asked for
+            if os.getppid() != sweep:  # the parent died before the signal was asked for
                 os._exit(1)
             return
-    threading.Thread(target=_watch_parent, args=(parent,), name="interlock-sweep-parent", daemon=True).start()
+    threading.Thread(target=_watch_sweep, args=(sweep,), name="interlock-sweep-watch", daemon=True).start()
 
 
-def _watch_parent(parent: int) -> None:
-    while os.getppid() == parent:
+def _watch_sweep(sweep: int) -> None:
+    while _exists(sweep):
         time.sleep(PARENT_POLL_SECONDS)
     os._exit(1)
+
+
+def _exists(pid: int) -> bool:
+    """Whether process ``pid`` exists (and is no zombie, where /proc tells)."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # exists, another user's (the pid was reused)
+        return False
+    try:
+        with open(f"/proc/{pid}/stat", "rb") as stat:
+            return stat.read().rsplit(b")", 1)[1].split()[0] != b"Z"
+    except (OSError, IndexError):
+        return True
 
 
 def _chunks(spec: SweepSpec, skipped: set):
