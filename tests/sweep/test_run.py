@@ -598,14 +598,21 @@ def _alive(pid: int) -> bool:
         return False
 
 
-@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="the parent-death signal is Linux's; elsewhere a poll")
-def test_workers_end_when_the_sweep_is_killed_with_sigkill(tmp_path):
+# the command line with another start method for the local workers (forkserver: Python 3.14's default on Linux)
+WITH_START_METHOD = ("import multiprocessing, sys; multiprocessing.set_start_method(sys.argv[1]); "
+                     "from interlock.cli import main; sys.exit(main(sys.argv[2:]))")
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="Linux: /proc, psutil and the parent-death signal")
+@pytest.mark.parametrize("start", ["default", "forkserver"])
+def test_workers_end_when_the_sweep_is_killed_with_sigkill(tmp_path, start):
     psutil = pytest.importorskip("psutil")
     spec = {**P4, "verdicts": ["periodic"], "chunk": 1,
             "parameters": {"t": {"range": [0.2, 0.8], "steps": 40}, "s": {"range": [-0.4, 0.4], "steps": 40}}}
     spec_path, out = tmp_path / "spec.toml", tmp_path / "out.jsonl"
     spec_path.write_text(_toml(spec))
-    process = subprocess.Popen([sys.executable, "-m", "interlock", "sweep", str(spec_path), "-o", str(out),
+    command = ["-m", "interlock"] if start == "default" else ["-c", WITH_START_METHOD, start]
+    process = subprocess.Popen([sys.executable, *command, "sweep", str(spec_path), "-o", str(out),
                                 "--workers", "2"], start_new_session=True, stdout=subprocess.DEVNULL,
                                stderr=subprocess.DEVNULL)
     workers = []
