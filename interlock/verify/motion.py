@@ -8,14 +8,16 @@ from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
+import scipy.linalg
 
 from interlock import deprecation
 from interlock.blocks.assembly import Assembly, AssemblyError
 from interlock.errors import InterlockError
 from interlock.verify.collisions import IDENTITY_RTOL, MotionOverlaps, transform_offset
 
-__all__ = ["FiniteMotion", "Collision", "MotionError", "finite_motion", "moved", "twist_exponential",
-           "OVERLAP_RTOL", "REACH_RTOL", "STEPS", "SMALL_STEPS", "SEPARATION_RTOL", "IDENTITY_RTOL", "SCAN_POINTS"]
+__all__ = ["FiniteMotion", "Collision", "MotionError", "finite_motion", "followable_motions", "moved",
+           "twist_exponential", "OVERLAP_RTOL", "REACH_RTOL", "STEPS", "SMALL_STEPS", "SEPARATION_RTOL", "IDENTITY_RTOL",
+           "SCAN_POINTS", "FOLLOWED_MOTIONS", "LOCAL_KERNEL_COLUMNS"]
 
 #: A step collides when two blocks overlap in more than this fraction of the smaller block's volume.  The
 #: contacts' own tolerances are ~1e-5 of the model size, so faces that are planar only within them may overlap
@@ -34,6 +36,11 @@ SMALL_STEPS = (1e-4, 1e-3, 1e-2)
 SEPARATION_RTOL = 1e-6
 #: Points of the parameter range scanned to find where the motion reaches its reach.
 SCAN_POINTS = 256
+#: At most this many first-order motions are followed for one verdict (:func:`followable_motions`).
+FOLLOWED_MOTIONS = 12
+#: Local kernel motions (:func:`followable_motions`) are computed up to this many columns of ``A`` (a dense
+#: pivoted QR of the kernel basis).
+LOCAL_KERNEL_COLUMNS = 1200
 
 
 class MotionError(InterlockError):
@@ -159,6 +166,61 @@ def twist_exponential(twists, centres, s: float) -> np.ndarray:
     out[:, :3, :3] = R
     out[:, :3, 3] = centres - np.einsum("nij,nj->ni", R, centres) + np.einsum("nij,nj->ni", V, shift)
     return out
+
+
+def followable_motions(assembly: Assembly, verdict, contacts=None, limit: int = FOLLOWED_MOTIONS,
+                       budget=None) -> list[np.ndarray]:
+    """First-order motions worth following for a "not infinitesimally interlocked" verdict, most local last.
+
+    The verdict's motion (and its reverse, for a sliding one), then *local*
+    motions: a kernel vector of ``A`` mixes every independent slide, and
+    blocks that slide out one group at a time may collide when all slide at
+    once (seven groups of six tetrahedra in a p6 layer of radius 2).  The
+    kernel basis is turned so that each vector is 1 on one pivot coordinate
+    and 0 on the others (a pivoted QR of the basis: ``B = K K_P^-1``), which
+    makes its vectors move few blocks; each, and its reverse, is a motion of
+    ``A`` (``A x = 0``).  Those that press into a contact whose admissible
+    normals are a cone (:func:`~interlock.verify.admissible.cone_pressure`)
+    are left out, and so are all but ``limit`` motions.  Each is one twist
+    per block, scaled so that the largest ``max(|omega| L, |t|)`` is 1.
+    """
+    from interlock.verify.admissible import MOVING_RTOL, cone_pressure
+    from interlock.verify.contacts import model_contacts
+    from interlock.verify.first_order import matrix_rank
+    from interlock.verify.matrix import interlocking_matrix
+
+    if verdict.motion is None:
+        return []
+    out = [np.asarray(verdict.motion, dtype=float)]
+    if verdict.motion_kind == "sliding":
+        out.append(-out[0])
+    found = model_contacts(assembly, contacts)
+    A = interlocking_matrix(assembly, verdict.frame, verdict.translational, contacts=found)
+    if not A.shape[1] or A.shape[1] > LOCAL_KERNEL_COLUMNS or len(out) >= limit:
+        return out[:limit]
+    if budget is not None:
+        budget.check("beyond")
+    _, kernel, _ = matrix_rank(A.matrix, KERNEL_RTOL, budget)
+    if kernel.shape[1] < 1:
+        return out
+    pivots = scipy.linalg.qr(kernel.T, pivoting=True)[2][:kernel.shape[1]]
+    local = kernel @ np.linalg.inv(kernel[pivots])
+    local[np.abs(local) < KERNEL_RTOL * np.abs(local).max()] = 0.0
+    cones = [c for c in found if c.normals is not None]
+    for k in np.count_nonzero(local, axis=0).argsort(kind="stable"):  # the fewest moving entries first
+        twists = A.twists(local[:, k])
+        scale = np.maximum(np.abs(twists[:, :3]).max(axis=1) * A.length_scale, np.abs(twists[:, 3:]).max(axis=1))
+        motion = np.zeros((len(assembly), 6))
+        motion[A.free] = twists / scale.max()
+        for signed in (motion, -motion):
+            if len(out) < limit and (not cones or cone_pressure(signed, cones, assembly.centroids).max()
+                                     <= MOVING_RTOL):
+                out.append(signed)
+    return out
+
+
+#: A kernel entry below this fraction of the largest is zero (:func:`followable_motions`): ``check``'s rank tolerance.
+KERNEL_RTOL = 1e-9
 
 
 def moved(assembly: Assembly, motion, s: float, frame=None) -> Assembly:
