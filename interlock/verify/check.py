@@ -471,7 +471,7 @@ def beyond_first_order(assembly: Assembly, verdict: Verdict, *, contacts=None) -
     >>> v.interlocked, v.order, v.finite_motion.shown
     (False, 2, True)
     """
-    from interlock.verify.motion import finite_motion
+    from interlock.verify.motion import finite_motion, followable_motions
     from interlock.verify.second_order import second_order
 
     first = verdict.status
@@ -485,7 +485,8 @@ def beyond_first_order(assembly: Assembly, verdict: Verdict, *, contacts=None) -
         return dataclasses.replace(verdict, interlocked=True, status=f"{second.status}; first order: {first}")
     shown = None
     if verdict.motion is not None:
-        candidates = [verdict.motion] + ([-verdict.motion] if verdict.motion_kind == "sliding" else [])
+        # the verdict's motion (reversed too, when sliding), then local ones: slides of single groups of blocks
+        candidates = followable_motions(assembly, verdict, contacts)
         for motion in candidates:
             shown = finite_motion(assembly, motion, frame=verdict.frame)
             if shown.shown:
