@@ -48,6 +48,8 @@
   var SELECTED = new THREE.Color('#ffd400');
   // above this many blocks the edges are not smoothed (multisampling): without a GPU it doubles the first frame
   var SMOOTH_BLOCKS = 2000;
+  // moving blocks draw their edges (one line set each) up to this many; beyond, only their colour shows them
+  var MOVING_EDGES = 300;
 
   function forceColour(share, target) {  // blue (small) -> orange -> red (largest)
     var stops = [[0.2, 0.35, 0.85], [0.95, 0.6, 0.1], [0.85, 0.1, 0.1]];
@@ -132,6 +134,7 @@
                                                                           opacity: 0.45 });
     var matrix = new THREE.Matrix4(), point = new THREE.Vector3();
     var staticEdges = [], self = this;
+    var ownEdges = this.moving.size <= MOVING_EDGES;
     this.movingEdges = {};
     Object.keys(byType).forEach(function (type) {
       var members = byType[type], spec = data.geometries[type];
@@ -154,6 +157,7 @@
       members.forEach(function (block) {
         matrix.fromArray(matrices, 16 * block);
         if (self.moving.has(block)) {
+          if (!ownEdges) return;  // thousands of moving blocks: one line set each would cost a draw call each
           var own = new THREE.BufferGeometry();
           own.setAttribute('position', new THREE.BufferAttribute(edges, 3));
           var lines = new THREE.LineSegments(own, edgeMaterial);
@@ -241,8 +245,16 @@
   View.prototype.buildMotion = function () {
     var motion = this.data.motion;
     if (!motion) return;
+    if (motion.twists) {  // a twist (omega, t) per moving block about its centre: followed exactly, below
+      this.twists = decode(motion.twists, Float32Array);
+      this.centres = decode(motion.centres, Float32Array);
+      this.placed = motion.moving.map(function (block) { return new THREE.Matrix4(); });
+      var self = this;
+      motion.moving.forEach(function (block, b) { self.placed[b].fromArray(self.matrices, 16 * block); });
+      return;
+    }
     var matrices = decode(motion.matrices, Float32Array), m = new THREE.Matrix4();
-    this.poses = [];  // per step, per moving block: position and quaternion
+    this.poses = [];  // sampled placements (a finite motion's path): per step, per moving block
     for (var step = 0; step < motion.steps; step++) {
       var row = [];
       for (var b = 0; b < motion.moving.length; b++) {
@@ -253,31 +265,72 @@
       }
       this.poses.push(row);
     }
-    // a mirrored block's placement has a negative determinant: decompose gives a negative scale; keep it
   };
+
+  // exp(s xi) of a twist xi = (omega, t) about the centre c (Rodrigues; interlock.verify.motion.twist_exponential)
+  function screw(omega, t, c, s, target) {
+    var px = s * omega[0], py = s * omega[1], pz = s * omega[2], theta = Math.sqrt(px * px + py * py + pz * pz);
+    var a, b, d;
+    if (theta < 1e-4) {
+      a = 1 - theta * theta / 6; b = 0.5 - theta * theta / 24; d = 1 / 6 - theta * theta / 120;
+    } else {
+      a = Math.sin(theta) / theta; b = (1 - Math.cos(theta)) / (theta * theta);
+      d = (theta - Math.sin(theta)) / (theta * theta * theta);
+    }
+    var K = [[0, -pz, py], [pz, 0, -px], [-py, px, 0]], R = [], V = [];
+    for (var i = 0; i < 3; i++) {
+      R.push([]); V.push([]);
+      for (var j = 0; j < 3; j++) {
+        var k2 = K[i][0] * K[0][j] + K[i][1] * K[1][j] + K[i][2] * K[2][j], eye = i === j ? 1 : 0;
+        R[i].push(eye + a * K[i][j] + b * k2);
+        V[i].push(eye + b * K[i][j] + d * k2);
+      }
+    }
+    var move = [];
+    for (i = 0; i < 3; i++) {
+      move.push(c[i] - (R[i][0] * c[0] + R[i][1] * c[1] + R[i][2] * c[2])
+                + s * (V[i][0] * t[0] + V[i][1] * t[1] + V[i][2] * t[2]));
+    }
+    return target.set(R[0][0], R[0][1], R[0][2], move[0], R[1][0], R[1][1], R[1][2], move[1],
+                      R[2][0], R[2][1], R[2][2], move[2], 0, 0, 0, 1);
+  }
 
   View.prototype.setMotion = function (t) {  // t in [0, 1]: the share of the motion shown
     var motion = this.data.motion;
     if (!motion || this.failed) return;
     this.motionAt = Math.min(Math.max(t, 0), 1);
-    var x = this.motionAt * (motion.steps - 1), i = Math.min(Math.floor(x), motion.steps - 2), f = x - i;
-    if (motion.steps < 2) { i = 0; f = 0; }
-    var m = new THREE.Matrix4(), p = new THREE.Vector3(), q = new THREE.Quaternion(), self = this;
-    motion.moving.forEach(function (block, b) {
-      var a = self.poses[i][b], c = self.poses[Math.min(i + 1, motion.steps - 1)][b];
-      p.lerpVectors(a.p, c.p, f);
-      q.slerpQuaternions(a.q, c.q, f);
-      m.compose(p, q, a.s);
-      var at = self.where[block];
-      self.meshes[at[0]].setMatrixAt(at[1], m);
-      self.meshes[at[0]].instanceMatrix.needsUpdate = true;
-      self.meshes[at[0]].computeBoundingSphere();
-      if (self.movingEdges[block]) self.movingEdges[block].matrix.copy(m);
-    });
+    var m = new THREE.Matrix4(), self = this, touched = new Set();
+    if (this.twists) {
+      var s = this.motionAt * motion.end, tw = this.twists, ce = this.centres;
+      motion.moving.forEach(function (block, b) {
+        screw([tw[6 * b], tw[6 * b + 1], tw[6 * b + 2]], [tw[6 * b + 3], tw[6 * b + 4], tw[6 * b + 5]],
+              [ce[3 * b], ce[3 * b + 1], ce[3 * b + 2]], s, m).multiply(self.placed[b]);
+        self.place(block, m, touched);
+      });
+    } else {
+      var x = this.motionAt * (motion.steps - 1), i = Math.min(Math.floor(x), motion.steps - 2), f = x - i;
+      if (motion.steps < 2) { i = 0; f = 0; }
+      var p = new THREE.Vector3(), q = new THREE.Quaternion();
+      motion.moving.forEach(function (block, b) {
+        var a = self.poses[i][b], c = self.poses[Math.min(i + 1, motion.steps - 1)][b];
+        p.lerpVectors(a.p, c.p, f);
+        q.slerpQuaternions(a.q, c.q, f);
+        m.compose(p, q, a.s);
+        self.place(block, m, touched);
+      });
+    }
+    touched.forEach(function (mesh) { mesh.instanceMatrix.needsUpdate = true; mesh.computeBoundingSphere(); });
     if (this.slider && Number(this.slider.value) !== Math.round(this.motionAt * 1000)) {
       this.slider.value = String(Math.round(this.motionAt * 1000));
     }
     this.render();
+  };
+
+  View.prototype.place = function (block, matrix, touched) {  // a moving block's placement, and its edges
+    var at = this.where[block], mesh = this.meshes[at[0]];
+    mesh.setMatrixAt(at[1], matrix);
+    touched.add(mesh);
+    if (this.movingEdges[block]) this.movingEdges[block].matrix.copy(matrix);
   };
 
   View.prototype.blockMatrix = function (block) {  // the block's current placement (column-major, 16 numbers)

@@ -145,7 +145,8 @@ def _kinematic(assembly, verdict, frame_words) -> str:
         return (f"{held}, {who} can move{how} within the contacts' tolerance: as built to that tolerance, "
                 "the assembly is not interlocked.")
     if verdict.interlocked is False:
-        return f"{held}, {who} can start to move{how}: no contact stops it at first order."
+        them = "them" if len(moving) > 1 else "it"
+        return f"{held}, {who} can start to move{how}: no contact stops {them} at first order."
     if verdict.order == 2 and moving:
         return (f"{held}, it is undecided whether {who} can move: a first-order motion{how} exists, but it was "
                 "neither blocked at second order nor shown to be a finite motion.")
