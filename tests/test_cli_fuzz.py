@@ -20,7 +20,7 @@ from hypothesis import strategies as st
 
 from interlock.blocks import random_hexagon, rhomblock_assembly
 from interlock.cli import main
-from interlock.gallery import export
+from interlock import write
 
 #: The formats of a multi-block file that a damaged copy is made of.
 FORMATS = (".obj", ".stl", ".ply", ".vtu", ".xdmf", ".glb", ".3mf")
@@ -35,7 +35,7 @@ def files(tmp_path_factory):
     """A 3 x 3 x 3 RhomBlock hexagon (27 blocks, ring fixed) in every format, and a folder to write into."""
     folder = tmp_path_factory.mktemp("fuzz")
     hexagon = rhomblock_assembly(random_hexagon(3, 3, 3, seed=0), 0, frame="boundary")
-    return folder, {suffix: export(hexagon, folder / f"hexagon{suffix}").read_bytes() for suffix in FORMATS}
+    return folder, {suffix: write(hexagon, folder / f"hexagon{suffix}").read_bytes() for suffix in FORMATS}
 
 
 def _run(argv) -> tuple[int, str, str]:

@@ -100,10 +100,10 @@ def test_a_failed_write_removes_its_own_temporary_file_and_keeps_the_old_one(tmp
 @pytest.mark.parametrize("suffix", [".glb", ".obj", ".json", ".3mf", ".stl"])
 def test_an_export_after_a_killed_export_leaves_no_partial_file(tmp_path, suffix):
     from interlock.blocks import presets
-    from interlock.gallery import export
+    from interlock import write
 
     target = tmp_path / f"grid{suffix}"
     stale = [_killed_write(target)] + ([_killed_write(target.with_suffix(".mtl"))] if suffix == ".obj" else [])
-    export(presets.cube_grid(), target)
+    write(presets.cube_grid(), target)
     assert not any(path.exists() for path in stale)
     assert not [p.name for p in tmp_path.iterdir() if PARTIAL in p.name]
