@@ -55,7 +55,8 @@ def certify_verdict(assembly, A: InterlockingMatrix, verdict, budget=None):
     The rows of ``A`` are those of every contact that admits one normal: faces, vertex-face and edge-edge
     contacts (Remark 3.11) alike, so a stress certificate covers them all.  A verdict decided over the cones of
     normals of degenerate contacts (:func:`~interlock.verify.admissible.cone_search`) has no certificate on
-    ``A`` alone: an "interlocked" one is left uncertified, a motion is followed by finite steps.
+    ``A`` alone: an "interlocked" one is left uncertified; a motion's certificate covers the rows of ``A``, and
+    the contacts with a cone of normals were checked in floating point (``admissible.unless_cones``).
     ``budget`` (:class:`~interlock.verify.budget.Budget`): checked between the steps ("certify").
     """
     if budget is not None:
@@ -73,7 +74,6 @@ def certify_verdict(assembly, A: InterlockingMatrix, verdict, budget=None):
         return dataclasses.replace(verdict, certified=ok, status=f"{verdict.status}; {note}")
     if budget is not None:
         budget.check("certify")
-    verdict = _cones_in_float(verdict)
     if verdict.motion_kind == "opening":
         note = _opening_certificate(flint, A, verdict.motion)
         if note is not None:
@@ -93,15 +93,6 @@ def certify_verdict(assembly, A: InterlockingMatrix, verdict, budget=None):
         budget.check("certify")
     ok, note = _finite_steps(assembly, verdict)
     return dataclasses.replace(verdict, certified=ok, status=f"{verdict.status}; {note}")
-
-
-def _cones_in_float(verdict):
-    """A motion's verdict noting that contacts with a cone of normals (no row of A) were checked in float only."""
-    cones = sum(n for k, n in getattr(verdict, "contact_kinds", {}).items() if k.endswith("(cone)"))
-    if not cones or verdict.motion is None:
-        return verdict
-    return dataclasses.replace(verdict, status=f"{verdict.status}; the {cones} contacts whose admissible normals "
-                                               "are a cone were checked in floating point only")
 
 
 def _stress_certificate(flint, matrix, w: np.ndarray):
