@@ -8,10 +8,11 @@ import sys
 
 def add_parser(commands) -> None:
     gallery = commands.add_parser(
-        "gallery", help="generate, verify and export the gallery of assemblies (STL, GLB, PNG, index.html)",
+        "gallery", help="generate, verify and export the gallery of assemblies (STL, GLB, PNG; index.html, 3D views)",
         description="Build the gallery: Escher blocks of the wallpaper groups, the paper's examples and RhomBlock "
                     "assemblies, each verified (finite and periodic), exported and drawn, with an offline "
-                    "index.html. Exits 1 if a verdict contradicts what the paper proves.",
+                    "index.html: a table of contents, the legend, and per entry its verdict in one sentence and an "
+                    "interactive 3D view (interlock view). Exits 1 if a verdict contradicts what the paper proves.",
         epilog="example:\n  interlock gallery gallery/ --quick\n  open gallery/index.html",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )

@@ -88,7 +88,7 @@ def test_where_each_format_stores_the_frame(tmp_path, framed):
     assert obj[0] == f"# interlock blocks=69 fixed=24 triangles={len(records)}"
     assert [line for line in obj if line.startswith("o ")][44:46] == ["o block_0044", "o block_0045 fixed"]
     ply = trimesh.load(export(p4, tmp_path / "p4.ply"), process=False)
-    raw = ply.metadata["_ply_raw"]["face"]["data"]
+    raw = ply.metadata["_ply_raw"]["vertex"]["data"]  # block, fixed and colour per vertex (meshio reads them)
     np.testing.assert_array_equal(raw["fixed"].astype(bool), fixed[raw["block"]])
     scene = trimesh.load_scene(export(p4, tmp_path / "p4.glb"))
     assert scene.metadata["interlock"] == "interlock blocks=69 fixed=24"
@@ -175,8 +175,8 @@ def test_ply_and_3mf_colour_every_block_by_class(tmp_path, assemblies):
     rhomb = assemblies["rhomblock"]
     expected = block_colours(rhomb)
     ply = trimesh.load(export(rhomb, tmp_path / "rhomb.ply"), process=False)
-    blocks = ply.metadata["_ply_raw"]["face"]["data"]["block"]
-    np.testing.assert_array_equal(ply.visual.face_colors, expected[blocks])
+    blocks = ply.metadata["_ply_raw"]["vertex"]["data"]["block"]
+    np.testing.assert_array_equal(ply.visual.vertex_colors, expected[blocks])
 
     with zipfile.ZipFile(export(rhomb, tmp_path / "rhomb.3mf")) as package:
         model = ET.fromstring(package.read("3D/3dmodel.model"))

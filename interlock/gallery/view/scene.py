@@ -100,7 +100,10 @@ def scene(obj, verdict=None, stability=None, *, title: str | None = None, contac
     geometries, types, local = shared_geometry(assembly)
     placements = shift @ local
     classes, kind = block_classes(assembly)
-    names = [f"{CLASS_WORDS.get(kind, kind)} {k}" for k in range(int(classes.max()) + 1)]
+    if kind == "type" and classes.max() >= len(PALETTE):  # shapes of their own (an arch's voussoirs): one colour
+        classes, kind = np.zeros_like(classes), "blocks"
+    names = [f"{CLASS_WORDS.get(kind, kind)} {k}" for k in range(int(classes.max()) + 1)] if kind != "blocks" \
+        else ["blocks"]
     motion = _motion(assembly, verdict, stability, shift, local)
     return {
         "version": SCENE_VERSION,
