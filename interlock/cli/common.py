@@ -19,7 +19,7 @@ MESH_FORMATS = ("OBJ, STL, PLY, GLB/GLTF, 3MF, OFF, VTU, XDMF, Rhino 3DM, COMPAS
 
 
 #: The suffixes ``generate -o`` and ``convert`` write (interlock.gallery.export.FORMATS).
-OUTPUT_SUFFIXES = (".stl", ".obj", ".ply", ".glb", ".3mf", ".vtu", ".xdmf", ".3dm", ".json")
+OUTPUT_SUFFIXES = (".stl", ".obj", ".ply", ".glb", ".3mf", ".vtu", ".xdmf", ".3dm", ".off", ".json")
 
 #: The largest ``--exploded`` factor: blocks move by the factor times their distance from the centre, so a
 #: factor of 1,000 already spreads them a thousand times wider than they are; beyond, positions overflow.
