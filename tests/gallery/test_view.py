@@ -273,3 +273,12 @@ def test_html_argument_for_verify_and_stability(tmp_path):
     args = parser.parse_args(["stack.glb", "--html", str(tmp_path / "stability.html")])
     assert "It stands" in write_html(args, stack, rbe(stack, 0.5)).read_text(encoding="utf-8")
     assert write_html(parser.parse_args(["grid.stl"]), grid, check(grid)) is None
+
+
+@pytest.mark.parametrize("overlap, forces, motion", [(1.5, 1, None), (0.5, 0, "collapse")])
+def test_cra_results_show_forces_or_the_collapse(overlap, forces, motion):
+    from interlock.verify.statics import cra
+
+    data = scene(_stack(overlap), stability=cra(_stack(overlap), 0.5))
+    assert (data["forces"]["count"] if data["forces"] else 0) == forces
+    assert (data["motion"]["kind"] if data["motion"] else None) == motion

@@ -24,6 +24,7 @@ body.iv-single { display: flex; flex-direction: column; }
 .iv-head { padding: 10px 16px 6px; border-bottom: 1px solid #ddd; background: #fff; }
 .iv-head h1 { font-size: 17px; margin: 0 0 4px; font-weight: 600; }
 .iv-sentence { font-size: 16px; margin: 0 0 4px; }
+.iv-statement { margin: 0 0 2px; font-size: 12.5px; color: #444; font-family: ui-monospace, monospace; }
 .iv-details summary { cursor: pointer; color: #555; font-size: 13px; }
 .iv-details p { margin: 2px 0; font-size: 12.5px; color: #444; font-family: ui-monospace, monospace; }
 .iv-main { position: relative; flex: 1; min-height: 360px; }
@@ -95,8 +96,10 @@ def write_view(obj, path, verdict=None, stability=None, *, title: str | None = N
 def view_html(data: dict) -> str:
     """The page of one scene (:func:`~interlock.gallery.view.scene.scene`): header, viewer, scripts."""
     e = html.escape
-    lines = "".join(f"<p>{e(line)}</p>" for line in data["details"])
-    details = f"<details class='iv-details'><summary>The precise statement</summary>{lines}</details>" if lines else ""
+    statement, *rest = data["details"] or [""]
+    lines = "".join(f"<p>{e(line)}</p>" for line in rest)
+    details = (f"<p class='iv-statement' id='statement'>{e(statement)}</p>" if statement else "") + \
+        (f"<details class='iv-details'><summary>Tolerances and details</summary>{lines}</details>" if lines else "")
     return "\n".join([
         page_head(data["title"], _PAGE_STYLE),
         "<body class='iv-single'>",
