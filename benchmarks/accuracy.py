@@ -544,7 +544,7 @@ def run_edge_contacts(quick: bool = False) -> dict:
             verdicts[method] = (verdict, seconds)
         truth, source = case["label"], case.get("source", "unlabelled")
         if truth is None:
-            truth, source = _edge_label(assembly, verdicts["all types"][0])
+            truth, source = _edge_label(assembly, verdicts["all types"][0], verdicts["all types, order 2"][0])
         rows.append({"case": case["name"], "reproduce": case["reproduce"], "blocks": len(assembly),
                      "label": truth, "source": source,
                      "verdicts": [{"method": m, "verdict": _from_bool(v.interlocked), "seconds": t,
@@ -569,10 +569,13 @@ def run_edge_contacts(quick: bool = False) -> dict:
     return {"summary": summary, "cases": len(rows)}
 
 
-def _edge_label(assembly, verdict) -> tuple[str | None, str]:
-    """A label proven here: a translation witness checked by booleans, or the certified verdict; else none."""
-    if verdict.interlocked is False and verdict.motion is not None and _translation_witness(assembly, verdict.motion):
-        return NOT_INTERLOCKED, "a translation of the moving blocks, free of overlap at 5 distances (manifold3d)"
+def _edge_label(assembly, verdict, beyond) -> tuple[str | None, str]:
+    """A label proven here: a translation witness checked by booleans (the first-order motion, or the one the
+    order-2 verdict followed), or the certified verdict; else none."""
+    followed = None if beyond.finite_motion is None or not beyond.finite_motion.shown else beyond.finite_motion.twists
+    for motion in (verdict.motion, followed):
+        if verdict.interlocked is False and motion is not None and _translation_witness(assembly, motion):
+            return NOT_INTERLOCKED, "a translation of the moving blocks, free of overlap at 5 distances (manifold3d)"
     certified = check(assembly, certify=True)
     if certified.interlocked is True and certified.certified:
         return INTERLOCKED, "certified verdict with every contact type (exact positive self-stress)"
