@@ -234,3 +234,37 @@ def test_local_slides_decide_layers_where_the_whole_kernel_collides():
     layer = presets.honeycomb_layer(2.0)
     v = check(layer, order=2)
     assert v.interlocked is False and v.finite_motion.shown and len(v.finite_motion.moving) <= 6
+
+
+def _touches(found):
+    """Point contacts as comparable tuples, and face contacts by their pair, normal and area."""
+    points = sorted((c.i, c.j, c.kind, tuple(np.round(c.vertices[0], 9) + 0.0), tuple(np.round(c.normal, 9) + 0.0),
+                     None if c.normals is None else len(c.normals)) for c in found if c.kind != "face")
+    faces = sorted((c.i, c.j, tuple(np.round(c.normal, 9) + 0.0), round(c.area, 9)) for c in found if c.kind == "face")
+    return points, faces
+
+
+@pytest.mark.parametrize("mirror", [False, True])
+def test_instanced_blocks_give_the_point_contacts_of_their_world_meshes(mirror):
+    layer = presets.tetrahedra("p6", radius=1.5)
+    if mirror:  # the whole layer reflected: every block placed by a transform of determinant -1
+        layer = Assembly(layer.meshes, layer.types, np.diag([-1.0, 1, 1, 1]) @ layer.transforms, frame=layer.frame)
+        assert layer.mirrored.all()
+    instanced = contacts(layer, kinds="all")
+    assert len(layer.pair_kinds(np.array(sorted(layer.neighbours.edges)))[0]) < len(instanced)  # the shared path
+    one_by_one = contacts(Assembly.from_meshes(layer.world_meshes(), frame=layer.frame), kinds="all")
+    assert _touches(instanced) == _touches(one_by_one)
+
+
+def test_a_slide_blocked_only_by_crossed_edges_is_followed_or_blocked():
+    from interlock.verify.motion import finite_motion
+
+    h = math.sqrt(0.5)
+    pair = Assembly.from_meshes([_turned_cube(0, [0, 0, 0]), _turned_cube(1, [0.3, 0, 2 * h])], frame=[0])
+    down, up, along = np.zeros((2, 6)), np.zeros((2, 6)), np.zeros((2, 6))
+    down[1, 5], up[1, 5], along[1, 3] = -1.0, 1.0, 1.0
+    assert not finite_motion(pair, down).shown  # into the crossed edge: the edges press into each other
+    assert finite_motion(pair, up).shown and finite_motion(pair, along).shown  # away, and along the row's kernel
+    v = check(pair, order=2)
+    assert v.interlocked is False and v.finite_motion.shown
+    assert cone_pressure(v.motion, contacts(pair, kinds="all"), pair.centroids)[0] <= 1e-9
