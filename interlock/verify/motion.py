@@ -16,8 +16,8 @@ from interlock.errors import InterlockError
 from interlock.verify.collisions import IDENTITY_RTOL, MotionOverlaps, transform_offset
 
 __all__ = ["FiniteMotion", "Collision", "MotionError", "finite_motion", "followable_motions", "moved",
-           "twist_exponential", "OVERLAP_RTOL", "REACH_RTOL", "STEPS", "SMALL_STEPS", "SEPARATION_RTOL", "IDENTITY_RTOL",
-           "SCAN_POINTS", "FOLLOWED_MOTIONS", "LOCAL_KERNEL_COLUMNS"]
+           "twist_exponential", "OVERLAP_RTOL", "REACH_RTOL", "STEPS", "SMALL_STEPS", "SEPARATION_RTOL",
+           "IDENTITY_RTOL", "SCAN_POINTS", "FOLLOWED_MOTIONS", "LOCAL_KERNEL_COLUMNS", "KERNEL_RTOL"]
 
 #: A step collides when two blocks overlap in more than this fraction of the smaller block's volume.  The
 #: contacts' own tolerances are ~1e-5 of the model size, so faces that are planar only within them may overlap
