@@ -42,6 +42,7 @@ def check_block_count(count: float, what: str, max_blocks: int = MAX_BLOCKS) -> 
     """
     if isinstance(max_blocks, bool) or not isinstance(max_blocks, int) or max_blocks < 1:
         raise SizeError(f"max_blocks must be an integer >= 1, got {max_blocks!r}")
+    count = float(count)  # a Python float: a numpy one past 1e308 would warn on the way
     if not count <= max_blocks:  # NaN and inf too
         shown = f"{count:,.0f}" if count < 1e15 else f"{count:.2g}"
         raise SizeError(f"{what} would be {shown} blocks (about {memory_text(count * BYTES_PER_BLOCK)} to verify), "
