@@ -28,7 +28,7 @@ import scipy.optimize
 import scipy.sparse as sp
 
 from interlock.verify.first_order import matrix_rank
-from interlock.verify.margin import BEND_FACTOR, row_tolerances
+from interlock.verify.margin import BEND_FACTOR, EXACT_RTOL, row_tolerances
 from interlock.verify.matrix import InterlockingMatrix, interlocking_matrix
 
 __all__ = ["moving_names", "rigid_across_bends", "unless_bent", "unless_missed", "unless_cones", "cone_pressure",
@@ -226,11 +226,16 @@ def unless_cones(verdict, found, centroids, A: InterlockingMatrix | None = None,
         return dataclasses.replace(verdict, interlocked=None, status=(
             f"{undecided}; {solves} branches over the cones' normals did not decide (at most {CONE_BRANCHES})"))
     if kind == "none":
+        proof = (f"no first-order motion: the rows of A leave motions, but each presses into a contact whose "
+                 f"admissible normals are a cone ({len(cones)} such contacts; {solves} branches over their normals, "
+                 "every one without a motion)")
+        rounding = max((c.tolerance or 0.0 for c in found), default=0.0)
+        if rounding > EXACT_RTOL * A.length_scale:  # no stress of A, so no margin against the input's rounding
+            return dataclasses.replace(verdict, interlocked=None, status=(
+                f"floating point is not conclusive: the exact input is interlocked ({proof}), but no margin against "
+                f"the input's rounding ({rounding:.3g}) is assessed for a verdict decided over cones of normals"))
         return dataclasses.replace(verdict, interlocked=True, motion=None, motion_kind=None, moving=(), stress=None,
-                                   status=(f"no first-order motion: the rows of A leave motions, but each presses "
-                                           f"into a contact whose admissible normals are a cone ({len(cones)} "
-                                           f"such contacts; {solves} branches over their normals, every one "
-                                           "without a motion)"))
+                                   status=proof)
     motion, moving = found_motion
     opening = kind == "opening"
     return dataclasses.replace(verdict, interlocked=False, motion=motion, moving=moving, motion_kind=kind, status=(

@@ -268,3 +268,31 @@ def test_a_slide_blocked_only_by_crossed_edges_is_followed_or_blocked():
     v = check(pair, order=2)
     assert v.interlocked is False and v.finite_motion.shown
     assert cone_pressure(v.motion, contacts(pair, kinds="all"), pair.centroids)[0] <= 1e-9
+
+
+def _cone_contact(i, j, point, normals, kind="vertex-vertex"):
+    import dataclasses
+
+    normals = np.array(normals, dtype=float)
+    normals /= np.linalg.norm(normals, axis=1)[:, None]
+    normals.setflags(write=False)
+    c = Contact.at_points(i, j, normals.sum(axis=0), [point])
+    return dataclasses.replace(c, kind=kind, normals=normals, tolerance=0.0)
+
+
+def test_cone_search_proves_no_motion_when_every_branch_is_empty():
+    from interlock.verify.admissible import cone_search
+
+    # block 1 may only slide along x (faces above, below, in front, behind); one cone forbids +x, one -x
+    a = Assembly.from_meshes([trimesh.creation.box(bounds=[[-5, -5, -5], [-4, -4, -4]]),
+                              trimesh.creation.box(bounds=[[0, 0, 0], [1, 1, 1]])], frame=[0])
+    rows = [Contact.at_points(0, 1, [0, 0, 1], [[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]]),
+            Contact.at_points(0, 1, [0, 0, -1], [[0, 0, 1], [1, 0, 1], [0, 1, 1], [1, 1, 1]]),
+            Contact.at_points(0, 1, [0, 1, 0], [[0, 0, 0], [1, 0, 0], [0, 0, 1], [1, 0, 1]]),
+            Contact.at_points(0, 1, [0, -1, 0], [[0, 1, 0], [1, 1, 0], [0, 1, 1], [1, 1, 1]])]
+    A = interlocking_matrix(a, contacts=rows, translational=True)
+    cones = [_cone_contact(0, 1, [1, 0.5, 0.5], [[-1, 0.1, 0], [-1, -0.1, 0]]),  # some normal sees -x: no +x
+             _cone_contact(0, 1, [0, 0.5, 0.5], [[1, 0, 0.1], [1, 0, -0.1]])]  # and no -x
+    assert cone_search(A, cones, a.centroids)[1] == "none"
+    motion, kind, _ = cone_search(A, cones[:1], a.centroids)  # one cone only: the block slides along -x
+    assert kind in ("opening", "sliding") and motion[0][1, 3] < 0 and motion[1] == (1,)
