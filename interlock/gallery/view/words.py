@@ -139,7 +139,7 @@ def _kinematic(assembly, verdict, frame_words) -> str:
     if verdict.interlocked is False and shown:
         out = " and out" if getattr(finite, "separated", False) or finite.ending == "separated" else ""
         verb = "be lifted" if how.strip() == "straight up" else "be moved"
-        together = " together" if len(moving) > 1 else ""
+        together = " together" if len(moving) > 1 and "different directions" not in how else ""
         return f"{held}, {who} can {verb}{how}{together}{out}: a finite motion was shown without collision."
     if verdict.interlocked is False and verdict.motion_kind == "within tolerance":
         return (f"{held}, {who} can move{how} within the contacts' tolerance: as built to that tolerance, "
