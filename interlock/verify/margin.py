@@ -42,7 +42,7 @@ from interlock.files import json_float
 from interlock.verify.load_paths import LOAD_PATH_PASSES, load_path_bound
 
 __all__ = ["Margin", "MarginError", "assess", "rounding_tolerance", "input_precision", "row_tolerances",
-           "margin_lower_bound", "tolerant_motion", "coordinate_motion",
+           "margin_lower_bound", "one_stress_bounds", "tolerant_motion", "coordinate_motion",
            "GRID_BITS", "DECIMAL_MIN_RTOL", "DECIMAL_MAX_RTOL", "DECIMAL_FULL_SHARE", "PRECISION_FACTOR",
            "MARGIN_CHUNK", "ONE_STRESS_COLUMNS", "EXACT_RTOL", "TOLERANT_SHARE", "BEND_FACTOR", "MOTION_TIME_LIMIT"]
 
@@ -61,8 +61,8 @@ DECIMAL_FULL_SHARE = 0.5
 PRECISION_FACTOR = 4.0
 #: Faces measurably bent (contact deviation from its plane) count this many times their bend as tolerance.
 BEND_FACTOR = 2.0
-#: Up to this many columns, :func:`assess` also tries the one-stress bound where the load paths prove no margin
-#: above 1 (its cost grows as columns times rows).
+#: Up to this many coordinates left above 1 by the load paths, :func:`assess` also tries the one-stress bound on
+#: them (its cost grows as those coordinates times the rows).
 ONE_STRESS_COLUMNS = 6000
 #: Columns of ``(A^T A)^{-1}`` formed at a time by :func:`margin_lower_bound` (memory: rows x this).
 MARGIN_CHUNK = 256
@@ -188,12 +188,30 @@ def margin_lower_bound(A: sp.csr_matrix, eps: np.ndarray, stress, chunk: int = M
     Take ``u0 = -+A (A^T A)^{-1} e_j`` and add the stress until it is
     nonnegative: ``u = u0 + tau w`` with ``tau = max(0, max_r -u0_r / w_r)``.
     Then every ``x`` in ``P`` has ``||x||_inf <= B = max_j (eps . u)``, and
-    ``rho >= 1 / B``.  Needs full column rank; the inverse is one sparse LU,
-    applied to ``chunk`` coordinates at a time (cost: ``n`` solves and a dense
-    ``m x chunk`` block per chunk, ``O(n m)``).  The float stress's residual
-    ``A^T w`` is taken as zero.  Superseded in :func:`assess` by
-    :func:`~interlock.verify.load_paths.load_path_bound`, which is 20 to 100
-    times tighter; kept as a reference.
+    ``rho >= 1 / B`` (:func:`one_stress_bounds` gives each ``B_j``).  Needs
+    full column rank; the inverse is one sparse LU, applied to ``chunk``
+    coordinates at a time (cost: ``n`` solves and a dense ``m x chunk`` block
+    per chunk, ``O(n m)``).  The float stress's residual ``A^T w`` is taken
+    as zero.  In :func:`assess` only for the coordinates the load paths
+    (:func:`~interlock.verify.load_paths.load_path_bound`, 20 to 100 times
+    tighter) leave above 1.
+    """
+    largest = float(one_stress_bounds(A, eps, stress, chunk=chunk).max(initial=0.0))
+    return math.inf if largest <= 0 else 1.0 / largest
+
+
+def one_stress_bounds(A: sp.csr_matrix, eps: np.ndarray, stress, columns=None, chunk: int = MARGIN_CHUNK,
+                      budget=None) -> np.ndarray:
+    """``B_j >= max {|x_j| : A x >= -eps}`` for each of ``columns`` (default all), from one stress (see
+    :func:`margin_lower_bound`); ``budget`` is checked after every chunk (TimeLimitReached, "margin").
+
+    Examples
+    --------
+    Three cubes in a row, the outer ones fixed: the middle one moves along the row only within its tolerances.
+
+    >>> A = sp.csr_matrix(np.array([[1.0], [-1.0]]))
+    >>> one_stress_bounds(A, np.array([1e-3, 2e-3]), np.ones(2)).round(6).tolist()
+    [0.002]
     """
     eps = _row_tolerances_checked(eps, A.shape[0])
     w = np.asarray(stress, dtype=float)
@@ -202,19 +220,23 @@ def margin_lower_bound(A: sp.csr_matrix, eps: np.ndarray, stress, chunk: int = M
     if isinstance(chunk, bool) or not isinstance(chunk, (int, np.integer)) or chunk < 1:
         raise MarginError(f"chunk must be a positive integer, got {chunk!r}")
     n = A.shape[1]
-    gram = (A.T @ A).tocsc()
-    lu = scipy.sparse.linalg.splu(gram)
+    columns = np.arange(n) if columns is None else np.asarray(columns, dtype=int)
+    bounds = np.zeros(len(columns))
+    if not len(columns):
+        return bounds
+    lu = scipy.sparse.linalg.splu((A.T @ A).tocsc())
     weighted = float(eps @ w)
-    largest = 0.0
-    for start in range(0, n, chunk):
-        columns = np.arange(start, min(start + chunk, n))
-        unit = np.zeros((n, len(columns)))
-        unit[columns, np.arange(len(columns))] = 1.0
+    for start in range(0, len(columns), chunk):
+        part = np.arange(start, min(start + chunk, len(columns)))
+        unit = np.zeros((n, len(part)))
+        unit[columns[part], np.arange(len(part))] = 1.0
         u0 = -(A @ lu.solve(unit))
         for u in (u0, -u0):
             tau = np.maximum(0.0, (-u / w[:, None]).max(axis=0))
-            largest = max(largest, float((eps @ u + tau * weighted).max(initial=0.0)))
-    return math.inf if largest <= 0 else 1.0 / largest
+            bounds[part] = np.maximum(bounds[part], eps @ u + tau * weighted)
+        if budget is not None:
+            budget.check("margin")
+    return bounds
 
 
 def tolerant_motion(A: sp.csr_matrix, eps: np.ndarray, tol: float = 1e-9, budget=None):
@@ -435,10 +457,16 @@ def assess(matrix, contacts, scale: float, stress, tolerance, source: str, *, pe
     eps = row_tolerances(matrix, contacts, t)
     found = load_path_bound(A, eps, matrix.block_size, passes=passes, target=1.0, budget=budget)
     lower = found.margin
-    if lower <= 1.0 and stress is not None and A.shape[1] <= ONE_STRESS_COLUMNS:
-        # both bounds are proved; where the load paths prove nothing (the TopoLite bunny's many small contacts),
-        # the one-stress bound of the float verdict may (float32 bunny, frame {0, 1}: 1.7 against 0)
-        lower = max(lower, margin_lower_bound(A, eps, stress))
+    if lower <= 1.0 and stress is not None:
+        # both bounds are proved per coordinate; where the load paths prove nothing (the TopoLite bunny's many
+        # small contacts), the one-stress bound of the float verdict may (float32 bunny, frame {0, 1}: 1.7
+        # against 0), and it is needed only for the coordinates the load paths leave above 1
+        proved = found.coordinates.max(axis=1) if len(found.coordinates) else np.zeros(A.shape[1])
+        open_ = np.flatnonzero(~(proved < 1.0))
+        if len(open_) <= ONE_STRESS_COLUMNS:
+            proved[open_] = np.minimum(proved[open_], one_stress_bounds(A, eps, stress, open_, budget=budget))
+            largest = float(proved.max(initial=0.0))
+            lower = max(lower, math.inf if largest <= 0 else 1.0 / largest)
     if lower > 1.0:
         return Margin(lower, math.inf, largest, source, per_contact=bool(per_contact))
     motion, upper, status = None, math.inf, "no motion within the tolerance found"
