@@ -191,3 +191,17 @@ def test_off_is_read_by_meshio_and_checked_against_its_counts(tmp_path, hexagon)
     (tmp_path / "cut.off").write_text("\n".join(lines[:-5]) + "\n")
     with pytest.raises(FormatError, match="is cut short: its count line announces"):
         read(tmp_path / "cut.off")
+
+
+def test_lib3mf_in_strict_mode_reads_our_3mf_without_warnings(tmp_path, hexagon):
+    lib3mf = pytest.importorskip("lib3mf")
+    path = write(with_unit(hexagon, "in"), tmp_path / "h.3mf")
+    model = lib3mf.get_wrapper().CreateModel()
+    reader = model.QueryReader("3mf")
+    reader.SetStrictModeActive(True)
+    reader.ReadFromFile(str(path))
+    assert reader.GetWarningCount() == 0
+    items = model.GetBuildItems()
+    assert items.MoveNext()
+    group = items.GetCurrent().GetMetaDataGroup()
+    assert {group.GetMetaData(k).GetName() for k in range(group.GetMetaDataCount())} >= {"block", "label", "fixed"}
