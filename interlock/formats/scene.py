@@ -54,6 +54,11 @@ def read_scene(path: Path, up: np.ndarray | None = None, header: str | None = No
     for _, _, transform, mesh in nodes:
         transform = up @ transform  # exact for glTF: the rows of ``transform`` permuted, one negated
         vertices = trimesh.transform_points(mesh.vertices, transform)
+        if _float32(mesh.vertices) and not np.array_equal(transform, np.eye(4)):
+            # a shared float32 mesh placed by a node: the positions are known to float32 (what a viewer computes),
+            # and stored so, the precision they show is read as it is (in float64 they would read as exact, and
+            # contacts a float32 step apart would be lost)
+            vertices = vertices.astype(np.float32).astype(float)
         faces = mesh.faces[:, ::-1] if np.linalg.det(transform[:3, :3]) < 0 else mesh.faces  # a reflection
         placed.append((vertices, faces))
     if not placed:
@@ -66,3 +71,10 @@ def read_scene(path: Path, up: np.ndarray | None = None, header: str | None = No
                           np.repeat(np.arange(len(placed)), [len(f) for _, f in placed]))
     count = None if announced is None else announced[0]
     return MeshFile(tuple(node[0] for node in nodes), tuple(meshes), frame, count, labels, info, unit)
+
+
+def _float32(values) -> bool:
+    """Whether every number is a float32 (as glTF and 3MF readers hand them over in float64)."""
+    values = np.asarray(values, dtype=float)
+    with np.errstate(over="ignore"):
+        return bool(values.size) and bool(np.array_equal(values.astype(np.float32).astype(float), values))
