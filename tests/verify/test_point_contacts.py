@@ -11,7 +11,8 @@ from interlock.blocks.contact import Contact
 from interlock.verify import check, interlocking_matrix
 from interlock.verify.admissible import cone_pressure, unless_cones
 from interlock.verify.contacts import ContactError, contacts
-from interlock.verify.point_contacts import admissible_normals, contact_kinds
+from interlock.verify.point_contacts import contact_kinds
+from interlock.verify.tangent_cones import admissible_normals
 
 # --- the rows Remark 3.11 predicts, against hand-written matrices -------------------------------------------
 

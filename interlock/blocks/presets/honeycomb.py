@@ -59,9 +59,9 @@ def honeycomb_layer(radius: float = 1.5, frame="boundary") -> Assembly:
 
     Examples
     --------
-    >>> layer = honeycomb_layer(radius=1.0)
+    >>> layer = honeycomb_layer(radius=2.0)
     >>> len(layer), [int(k) for k in np.bincount(layer.types)], len(layer.frame)
-    (13, [3, 3, 7], 9)
+    (43, [12, 19, 12], 24)
     """
     radius = finite(radius, "radius")
     if radius < 0:
