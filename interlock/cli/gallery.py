@@ -13,10 +13,10 @@ def add_parser(commands) -> None:
                     "assemblies, each verified (finite and periodic), exported and drawn, with an offline "
                     "index.html: a table of contents, the legend, and per entry its verdict in one sentence and an "
                     "interactive 3D view (interlock view). Exits 1 if a verdict contradicts what the paper proves.",
-        epilog="example:\n  interlock gallery gallery/ --quick\n  open gallery/index.html",
+        epilog="example:\n  interlock gallery gallery-out/ --quick\n  open gallery-out/index.html",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    gallery.add_argument("out", help="folder to write (created if missing)")
+    gallery.add_argument("out", help="folder to write (created if missing; the folder above it must exist)")
     gallery.add_argument("--quick", action="store_true", help="a small gallery of five entries")
     gallery.add_argument("--seed", type=int, default=0, help="seed of the random deformations and tilings")
     gallery.set_defaults(run=run)

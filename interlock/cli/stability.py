@@ -7,6 +7,7 @@ import json
 import time
 
 from interlock.cli.common import MESH_FORMATS, axis_direction, load, real_number, time_limit
+from interlock.cli.view import add_html_argument, write_html
 from interlock.errors import InterlockError
 
 #: The largest ``--density``: weights are densities times volumes, and forces sums of weights, so far beyond
@@ -57,6 +58,7 @@ def add_parser(commands) -> None:
                            help="use the interfaces a COMPAS assembly JSON file stores (as compas_assembly / "
                                 "compas_cra write them) instead of finding contacts")
     stability.add_argument("--json", action="store_true", help="print JSON instead of text")
+    add_html_argument(stability)
     stability.set_defaults(run=run)
 
 
@@ -104,6 +106,7 @@ def run(args) -> int:
     else:
         result = rbe(assembly, args.mu, density=args.density, cone=args.cone, contacts=found,
                      time_limit=time_limit(args.time_limit, started))
+    write_html(args, assembly, result)
     tilt = None
     if args.tilt_axis is not None:
         axis = args.tilt_axis if args.tilt_axis in ("x", "y", "xy30") else axis_direction(args.tilt_axis)

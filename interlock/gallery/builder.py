@@ -22,7 +22,7 @@ from interlock.blocks import (Assembly, cell_patch, escher_block, patch, periodi
                               rhomblock, rhomblock_assembly, staircase)
 from interlock.blocks.escher import Block, DeformationError
 from interlock.errors import GalleryError
-from interlock.files import PARTIAL, replace_folder, write_atomically
+from interlock.files import PARTIAL, replace_folder, unwritable, write_atomically
 from interlock.gallery.export import export
 from interlock.gallery.render import render
 from interlock.verify import check, contacts, criterion_4_3, periodic_check
@@ -387,10 +387,14 @@ def _staircase(counts, variant: int) -> Entry:
 
 
 def _folder(folder) -> Path:
-    """The gallery folder, absolute; created if missing, else checked to be empty or a gallery."""
+    """The gallery folder, absolute; created if missing (the folder above it must exist), else checked to be empty
+    or a gallery."""
     try:
         folder = Path(folder).resolve()
-        folder.mkdir(parents=True, exist_ok=True)
+        problem = unwritable(folder, folder_output=True)
+        if problem:
+            raise GalleryError(f"cannot write the gallery {folder}: {problem}")
+        folder.mkdir(exist_ok=True)
         contents = [p.name for p in folder.iterdir()]
     except OSError as error:
         raise GalleryError(f"cannot create the gallery folder {folder}: {error.strerror or error}") from None

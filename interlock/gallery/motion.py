@@ -55,7 +55,7 @@ def export_motion(assembly: Assembly, result: FiniteMotion, folder, frames: int 
         raise MotionError(f"unknown frame format {format!r}; choose one of {', '.join(FRAME_FORMATS)}")
     folder = Path(folder)
     try:
-        folder.mkdir(parents=True, exist_ok=True)
+        folder.mkdir(exist_ok=True)  # as every output: created, but never the missing folders above it
     except OSError as error:
         raise MotionError(f"cannot create the folder {folder}: {error.strerror or error}") from None
     last = result.parameters[-1] if result.parameters else result.start

@@ -117,8 +117,11 @@ def test_unknown_entries_and_unwritable_folders_are_clear_errors(tmp_path):
         build(tmp_path, quick=True, names=["no-such-entry"])
     blocker = tmp_path / "file"
     blocker.write_text("")
-    with pytest.raises(GalleryError, match="cannot create the gallery folder"):
+    with pytest.raises(GalleryError, match="cannot write the gallery .*inside"):
         build(blocker / "inside", quick=True)
+    with pytest.raises(GalleryError, match="cannot write the gallery"):  # a missing folder above it is not made
+        build(tmp_path / "missing" / "gallery", quick=True)
+    assert not (tmp_path / "missing").exists()
 
 
 def test_a_contradiction_is_reported(tmp_path, monkeypatch):
