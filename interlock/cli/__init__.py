@@ -41,7 +41,7 @@ def main(argv: list[str] | None = None) -> int:
     except MemoryError:
         print(f"interlock {args.command}: error: out of memory; try a smaller input (or --max-blocks / --max-points "
               "lower)", file=sys.stderr)
-        return 1
+        return EXIT_BAD_INPUT  # never 1, which verify and periodic answer "not interlocked" with
     except KeyboardInterrupt:
         print("interlock: interrupted", file=sys.stderr)
         return 130

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import os
 
-from interlock.cli.common import MESH_FORMATS, OUTPUT_SUFFIXES, bar_progress, frame_text, load
+from interlock.cli.common import MESH_FORMATS, OUTPUT_SUFFIXES, bar_progress, frame_text, load, output_file
 from interlock.errors import InterlockError
 
 #: What ``--unit``, ``--scale`` and ``--up`` mean, in the help of ``convert`` and ``generate``.
@@ -30,7 +30,7 @@ def add_parser(commands) -> None:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     convert.add_argument("source", metavar="IN", help=f"an assembly file: {MESH_FORMATS}")
-    convert.add_argument("target", metavar="OUT", help=f"the file to write: {', '.join(OUTPUT_SUFFIXES)}")
+    convert.add_argument("target", metavar="OUT", type=output_file, help=f"the file to write: {', '.join(OUTPUT_SUFFIXES)}")
     convert.add_argument("--fixed", default=None, metavar="LIST",
                          help="frame: block indices, e.g. 0,1 or 0-3,7 (default: the frame IN stores)")
     unit_arguments(convert)

@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 import sys
 
+from interlock.cli.common import whole_number
+
 
 def add_parser(commands) -> None:
     gallery = commands.add_parser(
@@ -18,7 +20,7 @@ def add_parser(commands) -> None:
     )
     gallery.add_argument("out", help="folder to write (created if missing; the folder above it must exist)")
     gallery.add_argument("--quick", action="store_true", help="a small gallery of five entries")
-    gallery.add_argument("--seed", type=int, default=0, help="seed of the random deformations and tilings")
+    gallery.add_argument("--seed", type=whole_number, default=0, help="seed of the random deformations and tilings")
     gallery.set_defaults(run=run)
 
 

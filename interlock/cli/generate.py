@@ -5,7 +5,8 @@ from __future__ import annotations
 import argparse
 
 from interlock import wallpaper
-from interlock.cli.common import block_limit, edge_points, lattice_arguments, output_arguments
+from interlock.cli.common import (block_limit, edge_points, lattice_arguments, length, numbers, output_arguments,
+                                  whole_number)
 from interlock.cli.convert import sized, unit_arguments
 from interlock.errors import InterlockError
 
@@ -27,8 +28,8 @@ def add_parser(commands) -> None:
     escher.add_argument("group", help="wallpaper group, e.g. p4")
     escher.add_argument("--deform", action="append", default=[], metavar="EDGE:X,Y[;X,Y...]",
                         help="intermediate points of one edge (repeat for more edges), e.g. 0:0.25,0.1")
-    escher.add_argument("--height", type=float, default=1.0, help="block height (default 1)")
-    escher.add_argument("--radius", type=float, default=2.0, help="patch radius in cell lengths (default 2)")
+    escher.add_argument("--height", type=length, default=1.0, help="block height (default 1)")
+    escher.add_argument("--radius", type=length, default=2.0, help="patch radius in cell lengths (default 2)")
     lattice_arguments(escher)
     output_arguments(escher)
     unit_arguments(escher)
@@ -43,11 +44,11 @@ def add_parser(commands) -> None:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     source = rhomb.add_mutually_exclusive_group(required=True)
-    source.add_argument("--hexagon", type=int, nargs=3, metavar=("A", "B", "C"), help="hexagon side lengths")
+    source.add_argument("--hexagon", type=whole_number, nargs=3, metavar=("A", "B", "C"), help="hexagon side lengths")
     source.add_argument("--periodic", metavar="KIND", help="staircase counts N0,N1,N2 or a named tiling")
-    rhomb.add_argument("--seed", type=int, default=0, help="seed of the random hexagon tiling (default 0)")
-    rhomb.add_argument("--variant", type=int, default=0, choices=(0, 1), help="RhomBlock assembly variant")
-    rhomb.add_argument("--radius", type=int, default=2, help="cells around the periodic cell (default 2)")
+    rhomb.add_argument("--seed", type=whole_number, default=0, help="seed of the random hexagon tiling (default 0)")
+    rhomb.add_argument("--variant", type=whole_number, default=0, choices=(0, 1), help="RhomBlock assembly variant")
+    rhomb.add_argument("--radius", type=whole_number, default=2, help="cells around the periodic cell (default 2)")
     output_arguments(rhomb)
     unit_arguments(rhomb)
     rhomb.set_defaults(run=run_rhomblock)
@@ -100,9 +101,9 @@ def run_rhomblock(args) -> int:
         counts = PERIODIC_KINDS.get(args.periodic)
         if counts is None:
             try:
-                counts = [int(part) for part in args.periodic.split(",")]
-            except ValueError:
+                counts = numbers(args.periodic, int, "--periodic")
+            except InterlockError:
                 raise InterlockError(f"cannot read --periodic {args.periodic!r}: give staircase counts N0,N1,N2 "
-                                     f"or one of {', '.join(PERIODIC_KINDS)}") from None
+                                     f"(digits 0-9) or one of {', '.join(PERIODIC_KINDS)}") from None
         assembly = cell_patch(rhomblock_assembly(staircase(counts), args.variant), args.radius, **block_limit(args))
     return write_assembly(assembly, args)

@@ -6,7 +6,7 @@ import argparse
 import json
 
 from interlock import wallpaper
-from interlock.cli.common import edge_points, lattice_arguments, numbers
+from interlock.cli.common import edge_points, lattice_arguments, length, numbers, whole_number
 from interlock.cli.verify import EXIT_STATUS, exit_status
 from interlock.errors import InterlockError
 
@@ -23,11 +23,11 @@ def add_parser(commands) -> None:
     periodic.add_argument("group", nargs="?", help="wallpaper group of an Escher block, e.g. p4")
     periodic.add_argument("--deform", action="append", default=[], metavar="EDGE:X,Y[;X,Y...]",
                           help="intermediate points of one edge (repeat for more edges), e.g. 0:0.25,0.1")
-    periodic.add_argument("--height", type=float, default=1.0, help="block height (default 1)")
+    periodic.add_argument("--height", type=length, default=1.0, help="block height (default 1)")
     lattice_arguments(periodic)
     periodic.add_argument("--staircase", metavar="N0,N1,N2",
                           help="RhomBlocks on the staircase tiling with these counts")
-    periodic.add_argument("--variant", type=int, default=0, choices=(0, 1), help="RhomBlock assembly variant")
+    periodic.add_argument("--variant", type=whole_number, default=0, choices=(0, 1), help="RhomBlock assembly variant")
     periodic.add_argument("--translational", action="store_true", help="translations only")
     periodic.add_argument("--certify", action="store_true", help="replay the reduction in exact arithmetic")
     periodic.add_argument("--json", action="store_true", help="print JSON instead of text")

@@ -6,8 +6,9 @@ import argparse
 import json
 import time
 
-from interlock.cli.common import (EXIT_BAD_INPUT, FRAME_FROM, MESH_FORMATS, MOVING_SHOWN, frame_text, load,
-                                  time_limit)
+from interlock.cli.common import (EXIT_BAD_INPUT, FRAME_FROM, MESH_FORMATS, MOVING_SHOWN, check_frames_option,
+                                  frame_text, load, real_number, time_limit, whole_number)
+from interlock.cli.view import add_html_argument, write_html
 
 #: The exit status of ``verify`` and ``periodic`` by their answer, as diff and grep answer with theirs; bad input
 #: (a file that cannot be read, a wrong option) is ``EXIT_BAD_INPUT``, 2.
@@ -42,20 +43,22 @@ def add_parser(commands) -> None:
                              "if any, else none)")
     verify.add_argument("--translational", action="store_true", help="translations only")
     verify.add_argument("--certify", action="store_true", help="re-check the verdict rigorously")
-    verify.add_argument("--order", type=int, choices=(1, 2), default=1,
+    verify.add_argument("--order", type=whole_number, choices=(1, 2), default=1,
                         help="2: take a verdict that is not 'interlocked' to second order and try the motion "
                              "as a finite one (default 1: first order)")
     verify.add_argument("--frames", metavar="FOLDER",
                         help="with --order 2: write a finite motion shown into FOLDER, frame by frame "
                              "(STL, and PNG with the plot extra)")
-    verify.add_argument("--time-limit", type=float, default=None, metavar="SECONDS",
+    verify.add_argument("--time-limit", type=real_number, default=None, metavar="SECONDS",
                         help="seconds for the whole command (reading the files included); past it the answer is "
                              "'inconclusive: time limit reached in <stage>' (default: no limit)")
     verify.add_argument("--json", action="store_true", help="print JSON instead of text")
+    add_html_argument(verify)
     verify.set_defaults(run=run)
 
 
 def run(args) -> int:
+    check_frames_option(args)
     started = time.perf_counter()
     time_limit(args.time_limit, started)
     from interlock.verify import check
@@ -75,6 +78,7 @@ def run(args) -> int:
         limit = {} if args.time_limit is None else {"time_limit": time_limit(args.time_limit, started)}
         verdict = check(assembly, translational=args.translational, certify=args.certify, progress=announce,
                         order=args.order, **limit)
+    write_html(args, assembly, verdict)
     frames = []
     if args.frames and verdict.finite_motion is not None and verdict.finite_motion.shown:
         import importlib.util

@@ -395,17 +395,16 @@ def _decide(assembly, frame, translational, certify, rank_rtol, lp_tol, contacts
     if verdict.motion is not None and verdict.motion_kind == "within tolerance":
         # a motion the tolerances leave open: moved for real, it either shows the blocks coming apart or collides
         with _stage(timings, "motion", progress, budget):
-            verdict = _shown_finitely(assembly, verdict)
+            verdict = _shown_finitely(assembly, verdict, budget)
     if certify:
         from interlock.verify.certify import certify_verdict
 
         with _stage(timings, "certify", progress, budget):
-            verdict = certify_verdict(assembly, A, verdict)
+            verdict = certify_verdict(assembly, A, verdict, budget=budget)
     if order == 2 and verdict.interlocked is not True:
         with _stage(timings, "beyond", progress, budget):
-            verdict = beyond_first_order(assembly, verdict, contacts=found)
+            verdict = beyond_first_order(assembly, verdict, contacts=found, budget=budget)
     return verdict
-
 
 
 def _within_tolerance(A: InterlockingMatrix, found, limits, x, blocks: int, base: dict, rank: int, no_frame: str):
@@ -427,31 +426,38 @@ def _within_tolerance(A: InterlockingMatrix, found, limits, x, blocks: int, base
     if closing > 1.0:
         return None
     motion, moving = _motion(A, x, blocks, reversible=False)
+    base = {**base, "tolerances": {**base["tolerances"], "motion_from": "interior point"}}
     return Verdict(False, f"{moving_names(moving)} a first-order motion that opens contacts and closes none by more "
                           f"than {closing:.2g} of its tolerance (up to {float(limits.max()):.3g}; the LP's interior "
                           f"point, which floating point could not make exact){no_frame}", rank=rank, lp_value=None,
                    motion=motion, motion_kind="within tolerance", moving=moving, **base)
 
 
-def _shown_finitely(assembly: Assembly, verdict: Verdict) -> Verdict:
+def _shown_finitely(assembly: Assembly, verdict: Verdict, budget: Budget | None = None) -> Verdict:
     """A "not interlocked within tolerance" verdict whose motion, followed for real, moves the blocks apart.
 
     The motion keeps every contact within the input's tolerance.  Followed as a finite motion
     (:func:`~interlock.verify.motion.finite_motion`), it may move the blocks apart without overlap beyond
     :data:`~interlock.verify.motion.OVERLAP_RTOL` of a block's volume: then the answer is the plain "not interlocked
-    (finite motion shown)".  A collision leaves the verdict as it was.  (Not for a slide across a bent face: a
+    (finite motion shown)".  A collision leaves the verdict as it was, except for a motion that only an inexact LP
+    point gave (:func:`_within_tolerance`): that one is then inconclusive.  (Not for a slide across a bent face: a
     fold of 1e-7 blocks a unit block for real, yet overlaps it by less than that share of its volume.)
     """
     from interlock.verify.motion import finite_motion
 
-    shown = finite_motion(assembly, verdict.motion, frame=verdict.frame)
+    shown = finite_motion(assembly, verdict.motion, frame=verdict.frame, budget=budget)
+    if not shown.shown and verdict.tolerances.get("motion_from") == "interior point":
+        # no exact motion and none shown for real: a motion within tolerance of an inexact LP point is too little
+        return dataclasses.replace(verdict, interlocked=None, finite_motion=shown, status=(
+            f"{verdict.status}; followed for real, it collides ({shown.message})"))
     if not shown.shown:
         return verdict
     return dataclasses.replace(verdict, interlocked=False, finite_motion=shown,
                                status=f"{shown.message}; first order: {verdict.status}")
 
 
-def beyond_first_order(assembly: Assembly, verdict: Verdict, *, contacts=None) -> Verdict:
+def beyond_first_order(assembly: Assembly, verdict: Verdict, *, contacts=None,
+                       budget: Budget | None = None) -> Verdict:
     """Take a first-order verdict that is not "interlocked" to second order and to finite motions.
 
     1. Prestress stability (:func:`~interlock.verify.second_order.second_order`): a stress that makes the
@@ -461,6 +467,8 @@ def beyond_first_order(assembly: Assembly, verdict: Verdict, *, contacts=None) -
        exponential map with growing steps (:func:`~interlock.verify.motion.finite_motion`); if the blocks
        move clear without overlap beyond tolerance: False, "not interlocked (finite motion shown)".
     3. Otherwise None, naming what was tried.
+
+    Every solver and step runs under ``budget`` (the call's; TimeLimitReached when it is spent).
 
     Examples
     --------
@@ -478,7 +486,7 @@ def beyond_first_order(assembly: Assembly, verdict: Verdict, *, contacts=None) -
     if verdict.translational:  # the gaps are linear in translations: nothing to learn at second order
         second, tried = None, ["second order: not for translations only (the gaps are linear in them)"]
     else:
-        second = second_order(assembly, frame=verdict.frame, contacts=contacts)
+        second = second_order(assembly, frame=verdict.frame, contacts=contacts, budget=budget)
         tried = [f"second order: {second}"]
     verdict = dataclasses.replace(verdict, order=2, second_order=second)
     if second is not None and second.blocked:
@@ -486,9 +494,9 @@ def beyond_first_order(assembly: Assembly, verdict: Verdict, *, contacts=None) -
     shown = None
     if verdict.motion is not None:
         # the verdict's motion (reversed too, when sliding), then local ones: slides of single groups of blocks
-        candidates = followable_motions(assembly, verdict, contacts)
+        candidates = followable_motions(assembly, verdict, contacts, budget=budget)
         for motion in candidates:
-            shown = finite_motion(assembly, motion, frame=verdict.frame)
+            shown = finite_motion(assembly, motion, frame=verdict.frame, budget=budget)
             if shown.shown:
                 return dataclasses.replace(verdict, interlocked=False, finite_motion=shown,
                                            status=f"{shown.message}; first order: {first}")
