@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
+from interlock.blocks.bodies import BodiesError, closed_bodies
 from interlock.blocks.repair import group_meshes, split_t_junctions, unmatched_edges, unrepeated
 from interlock.formats.common import FormatError, MeshFile, touching_bodies
 
@@ -56,18 +57,24 @@ def triangle_frame(path: Path, face_block, face_fixed, announced_fixed) -> tuple
 def split_bodies(path: Path, found: MeshFile) -> MeshFile:
     """A file's one body split into its connected bodies (sharing an edge, T-junctions split first).
 
-    Bodies that touch share edges of more than two triangles and fall apart into open pieces; a single STL or
-    PLY file cannot tell them apart (an error).
+    Bodies that touch share edges of more than two triangles: they are told apart by pairing the half-edges
+    around each shared edge (:func:`~interlock.blocks.bodies.closed_bodies`); what cannot be paired into closed,
+    consistently oriented bodies is an error that says why.
     """
     mesh = found.meshes[0]
     if len(unmatched_edges(mesh.faces)):  # repeated triangles would make a body look like two that touch
         faces = unrepeated(mesh.faces)
         mesh = trimesh.Trimesh(mesh.vertices, split_t_junctions(mesh.vertices, faces), process=False)
     parts = mesh.split(only_watertight=False)
+    if not all(part.is_watertight for part in parts):  # bodies that touch share edges of more than two triangles
+        try:
+            parts = closed_bodies(mesh.vertices, mesh.faces)
+        except BodiesError as error:
+            if len(parts) <= 1:
+                return found  # one open body: refused where blocks are checked, as before
+            raise FormatError(f"{touching_bodies(path)}: {error}") from None
     if len(parts) <= 1:
         return found
-    if not all(part.is_watertight for part in parts):
-        raise FormatError(touching_bodies(path))
     frame = None if found.frame is None else tuple(range(len(parts))) if found.frame else ()
     return MeshFile(tuple(f"body{k}" for k in range(len(parts))), tuple(parts), frame, unit=found.unit)
 
