@@ -23,13 +23,15 @@ from interlock.blocks import (Assembly, cell_patch, escher_block, patch, periodi
 from interlock.blocks.escher import Block, DeformationError
 from interlock.errors import GalleryError
 from interlock.files import PARTIAL, replace_folder, unwritable, write_atomically
-from interlock.gallery.export import export
-from interlock.gallery.render import render
-from interlock.verify import check, contacts, criterion_4_3, periodic_check
-from interlock.verify.check import beyond_first_order
+from interlock.formats import write
+from interlock.gallery.appearance import exploded
 from interlock.gallery.motion import export_motion
 from interlock.gallery.page import finite_word, write_index
+from interlock.gallery.render import render
 from interlock.gallery.view.scene import scene
+from interlock.verify import check, criterion_4_3, periodic_check
+from interlock.verify.check import beyond_first_order
+from interlock.verify.contacts import model_contacts
 
 __all__ = ["Claim", "Entry", "EntryResult", "Gallery", "entries", "build", "finite_word", "ESCHER_GROUPS",
            "REFLECTION_GROUPS", "MOTION_FRAMES", "MANIFEST"]
@@ -114,7 +116,9 @@ def entries(quick: bool = False, seed: int = 0) -> tuple[Entry, ...]:
                 _hexagon((3, 3, 3), 0, seed), _staircase((1, 1, 0), 1))
     out = [_escher(name, seed) for name in ESCHER_GROUPS]
     out += [_escher(name, seed) for name in REFLECTION_GROUPS]
-    out += [_undeformed("p4"), _fig1(), _cube_grid(), _tilted_cubes(), _tetrahedra(), _modified_cubes()]
+    out += [_undeformed("p4"), _fig1(), _cube_grid(), _tilted_cubes(), _tetrahedra(),
+            _tetrahedra_layer("p3", True, "Fig. 5b"), _tetrahedra_layer("p6", False, "Fig. 5c (this package's slopes)"),
+            _honeycomb(), _modified_cubes()]
     out += [_hexagon(size, variant, seed) for size in ((4, 4, 4), (8, 8, 8), (20, 20, 20)) for variant in (0, 1)]
     out += [_staircase(counts, variant) for counts in ((1, 0, 0), (1, 1, 0), (2, 1, 1)) for variant in (0, 1)]
     return tuple(out)
@@ -345,6 +349,30 @@ def _tetrahedra() -> Entry:
                  (_finite_is(True, "Fig. 5a"),))
 
 
+def _tetrahedra_layer(symmetry: str, interlocked: bool, source: str) -> Entry:
+    """Fig. 5b/5c: a layer of tetrahedra with the outer ring as frame, held (or not) by edge-to-edge contacts."""
+    def make():
+        layer = presets.tetrahedra(symmetry, radius=1.5)
+        return {"block": layer.mesh(0), "assembly": layer,
+                "parameters": {"preset": "tetrahedra", "symmetry": symmetry, "radius": 1.5,
+                               "frame": "outer ring", "contacts": "every type (Remark 3.11)"}}
+
+    figure = {"p3": "5b", "p6": "5c"}[symmetry]
+    return Entry(f"fig{figure}-tetrahedra", f"Fig. {figure}: tetrahedra with {symmetry} symmetry, outer ring fixed",
+                 "preset", make, (_finite_is(interlocked, source),))
+
+
+def _honeycomb() -> Entry:
+    def make():
+        layer = presets.honeycomb_layer(1.5)
+        return {"block": layer.mesh(0), "assembly": layer,
+                "parameters": {"preset": "honeycomb_layer", "radius": 1.5, "frame": "outer ring",
+                               "contacts": "every type (Remark 3.11)"}}
+
+    return Entry("honeycomb-layer", "A layer of the tetrahedral-octahedral honeycomb, outer ring fixed", "preset",
+                 make, (_finite_is(False, "tet-oct honeycomb layer cut along its planes"),))
+
+
 def _modified_cubes() -> Entry:
     def make():
         a = presets.modified_cube_assembly()
@@ -427,7 +455,7 @@ def _build_entry(entry: Entry, folder: Path, seed: int) -> EntryResult:
               "blocks": len(assembly), "frame": list(assembly.frame)}
 
     clock = time.perf_counter()
-    found = contacts(assembly)
+    found = model_contacts(assembly)  # of every type (Remark 3.11), as check finds them
     first = check(assembly, validate=False, contacts=found)
     record["finite"] = first.to_dict()
     timings["finite_verdict"] = time.perf_counter() - clock
@@ -452,8 +480,8 @@ def _build_entry(entry: Entry, folder: Path, seed: int) -> EntryResult:
     clock = time.perf_counter()
     spread = 0.6 if entry.kind != "rhomblock" else 0.35
     files = {"block.stl": made["block"], "assembly.stl": assembly, "assembly.glb": assembly}
-    written = {name: _relative(export(obj, directory / name), folder) for name, obj in files.items()}
-    written["exploded.stl"] = _relative(export(assembly, directory / "exploded.stl", exploded=spread), folder)
+    written = {name: _relative(write(obj, directory / name), folder) for name, obj in files.items()}
+    written["exploded.stl"] = _relative(write(exploded(assembly, spread), directory / "exploded.stl"), folder)
     timings["export"] = time.perf_counter() - clock
 
     clock = time.perf_counter()
