@@ -240,7 +240,8 @@ def check(assembly: Assembly, frame=None, translational: bool = False, certify: 
         return _decide(assembly, frame, translational, certify, rank_rtol, lp_tol, contacts, validate, progress,
                        lp_solver, order, tolerance, budget, timings)
     except TimeLimitReached as reached:
-        return Verdict(None, f"{reached} (time_limit = {budget.limit:g} s)", frame=(), shape=(0, 0),
+        fixed = tuple(sorted(set(assembly.block_indices(assembly.frame if frame is None else frame))))
+        return Verdict(None, f"{reached} (time_limit = {budget.limit:g} s)", frame=fixed, shape=(0, 0),
                        rank=0, lp_value=None, translational=translational,
                        tolerances={"time_limit": budget.limit, "stage": reached.stage}, timings=timings, order=order)
 
