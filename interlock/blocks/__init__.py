@@ -14,9 +14,10 @@ from interlock import lazy_exports
 __all__ = ["Assembly", "AssemblyError", "Block", "DeformationError", "escher_block", "patch", "periodic_cell",
            "cell_patch", "cell_reach",
            "presets", "Lozenge", "LozengeTiling", "TilingError", "random_hexagon", "staircase", "rhomblock",
-           "rhomblock_assembly", "load_compas", "load_3dm", "semicircular_arch"]
+           "rhomblock_assembly", "semicircular_arch"]
 
-# where each exported name lives (presets is a subpackage)
+# where each exported name lives (presets is a subpackage); load_3dm and load_compas are deprecated aliases
+# (files moved to interlock.formats: interlock.read), importable until interlock 0.3 but not in __all__
 _HOMES = {
     "semicircular_arch": "interlock.blocks.arch",
     **dict.fromkeys(["Assembly", "AssemblyError", "load_3dm", "load_compas"], "interlock.blocks.assembly"),

@@ -13,12 +13,12 @@ from interlock.errors import InterlockError
 EXIT_BAD_INPUT = 2
 MOVING_SHOWN = 12
 
-#: The formats ``verify``, ``stability`` and ``convert`` read (interlock.blocks.meshfiles; any other trimesh reads).
+#: The formats ``verify``, ``stability`` and ``convert`` read (interlock.formats; any other trimesh reads).
 MESH_FORMATS = ("OBJ, STL, PLY, GLB/GLTF, 3MF, OFF, VTU, XDMF, Rhino 3DM, COMPAS assembly JSON (and other formats "
                 "trimesh reads); the files interlock generate writes keep their blocks and frame")
 
 
-#: The suffixes ``generate -o`` and ``convert`` write (interlock.gallery.export.FORMATS).
+#: The suffixes ``generate -o`` and ``convert`` write (interlock.formats.FORMATS).
 OUTPUT_SUFFIXES = (".stl", ".obj", ".ply", ".glb", ".3mf", ".vtu", ".xdmf", ".3dm", ".off", ".json")
 
 #: The largest ``--exploded`` factor: blocks move by the factor times their distance from the centre, so a
@@ -184,15 +184,17 @@ def bar_progress(bar):
 def write_assembly(assembly, args) -> int:
     from pathlib import Path
 
-    from interlock.gallery import export, render
+    from interlock.formats import write
+    from interlock.gallery import exploded, render
 
     from tqdm import tqdm
 
     if Path(args.output).suffix.lower() == ".png":
         path = render(assembly, args.output, exploded=args.exploded)
     else:
+        moved = exploded(assembly, args.exploded)
         with tqdm(desc=f"writing {Path(args.output).name}", unit="block", disable=None, leave=False) as bar:
-            path = export(assembly, args.output, exploded=args.exploded, progress=bar_progress(bar))
+            path = write(moved, args.output, progress=bar_progress(bar))
     print(f"wrote {path}: {len(assembly)} blocks, {len(assembly.frame)} in the frame")
     return 0
 
@@ -260,17 +262,17 @@ def axis_direction(text: str, flag: str = "--tilt-axis") -> list[float]:
 
 
 def load(paths, fixed, progress=None):
-    """``Assembly.load`` with ``--fixed`` read as block indices in every format.  The library reads a COMPAS
-    file's frame as node keys (what its ``is_support`` marks name); a CLI user counts blocks, as the output
+    """:func:`interlock.formats.read` with ``--fixed`` read as block indices in every format.  The library reads a
+    COMPAS file's frame as node keys (what its ``is_support`` marks name); a CLI user counts blocks, as the output
     does, so for ``.json`` the indices are applied after loading."""
     from pathlib import Path
 
-    from interlock.blocks import Assembly
+    from interlock.formats import read
 
     frame = None if fixed is None else indices(fixed)
     if frame is None or not isinstance(paths, (str, Path)) or Path(paths).suffix.lower() != ".json":
-        return Assembly.load(paths, frame=frame, progress=progress)
-    assembly = Assembly.load(paths, progress=progress)
+        return read(paths, frame=frame, progress=progress)
+    assembly = read(paths, progress=progress)
     outside = [k for k in frame if k >= len(assembly)]
     if outside:
         raise InterlockError(f"--fixed names block {outside[0]}, but {Path(paths).name} holds {len(assembly)} blocks "

@@ -1,25 +1,28 @@
-"""Exports, pictures and the gallery of generated and verified assemblies.
+"""Pictures, pages and the gallery of generated and verified assemblies (files are :func:`interlock.write`'s).
 
-- :func:`export`: a block, an assembly or a mesh to STL, OBJ, PLY, GLB, 3MF, VTU or XDMF.
 - :func:`render`: a PNG of a block, an assembly (also exploded) or a 2D tiling.
 - :func:`write_view`: an interactive, offline 3D view of an assembly and its verdicts (one HTML file).
-- :func:`build`: the gallery of :func:`entries`, each verified, exported and drawn, with ``index.html``.
+- :func:`build`: the gallery of :func:`entries`, each verified, written and drawn, with ``index.html``.
+- :func:`exploded`: an assembly with its blocks moved apart, to write or draw.
 
-Each name is imported on first use (:func:`interlock.lazy_exports`): exporting does not load matplotlib.
+Writing files moved to :mod:`interlock.formats` (:func:`interlock.write`); ``export`` and ``FORMATS`` here are
+deprecated aliases, removed in interlock 0.3.  Each name is imported on first use
+(:func:`interlock.lazy_exports`).
 """
 
-from interlock import lazy_exports
+from interlock import deprecation, lazy_exports
 
-__all__ = ["export", "render", "build", "entries", "Gallery", "FORMATS", "as_assembly", "block_classes",
-           "block_colours", "exploded", "write_view"]
+__all__ = ["render", "build", "entries", "Gallery", "as_assembly", "block_classes", "block_colours", "exploded",
+           "write_view"]
 
-# where each exported name lives
+# where each exported name lives; export is the deprecated alias of interlock.write (it warns when called)
 _HOMES = {
     **dict.fromkeys(["as_assembly", "block_classes", "block_colours", "exploded"], "interlock.gallery.appearance"),
     **dict.fromkeys(["Gallery", "build", "entries"], "interlock.gallery.builder"),
-    **dict.fromkeys(["FORMATS", "export"], "interlock.gallery.export"),
+    "export": "interlock.gallery.export",
     "render": "interlock.gallery.render",
     "write_view": "interlock.gallery.view.page",
 }
 
-__getattr__, __dir__ = lazy_exports(__name__, _HOMES)
+__getattr__, __dir__ = lazy_exports(__name__, _HOMES,
+                                    fallback=deprecation.moved(__name__, {"FORMATS": "interlock.formats.readwrite"}))

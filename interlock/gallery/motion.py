@@ -7,13 +7,13 @@ from pathlib import Path
 import numpy as np
 
 from interlock.blocks.assembly import Assembly
-from interlock.gallery.export import export
+from interlock.formats import write
 from interlock.gallery.render import render
 from interlock.verify.motion import FiniteMotion, MotionError, moved
 
 __all__ = ["export_motion", "FRAME_FORMATS"]
 
-#: What :func:`export_motion` writes: the mesh formats of :func:`~interlock.gallery.export.export`, and PNG pictures.
+#: What :func:`export_motion` writes: the mesh formats of :func:`interlock.write`, and PNG pictures.
 FRAME_FORMATS = ("stl", "obj", "ply", "glb", "3mf", "vtu", "xdmf", "png")
 
 
@@ -24,7 +24,7 @@ def export_motion(assembly: Assembly, result: FiniteMotion, folder, frames: int 
     one with the same blocks, such as a re-loaded copy).
     Frames run from the start of the motion to its last measured step (the
     collision, when there was one).  Mesh formats go through
-    :func:`~interlock.gallery.export.export` (one file holding every block, which
+    :func:`interlock.write` (one file holding every block, which
     loads back block by block; colours where the format has them), ``"png"``
     through :func:`~interlock.gallery.render.render` (needs matplotlib:
     ``pip install "interlock[plot]"``, else a :class:`~interlock.errors.GalleryError`).
@@ -33,13 +33,14 @@ def export_motion(assembly: Assembly, result: FiniteMotion, folder, frames: int 
     Examples
     --------
     >>> import tempfile, trimesh
+    >>> import interlock
     >>> from interlock.blocks import Assembly
     >>> from interlock.verify.motion import finite_motion
     >>> cubes = Assembly.from_meshes([trimesh.creation.box(bounds=[[x, 0, 0], [x + 1, 1, 1]]) for x in range(2)])
     >>> result = finite_motion(cubes, [[0, 0, 0, 0, 0, 0], [0, 0, 0, 1, 0, 0]], frame=[0])
     >>> with tempfile.TemporaryDirectory() as folder:
     ...     paths = export_motion(cubes, result, folder, frames=3)
-    ...     [p.name for p in paths], len(Assembly.load(paths[-1]))
+    ...     [p.name for p in paths], len(interlock.read(paths[-1]))
     (['frame_000.stl', 'frame_001.stl', 'frame_002.stl'], 2)
     """
     if not isinstance(result, FiniteMotion) or result.path is None:
@@ -63,5 +64,5 @@ def export_motion(assembly: Assembly, result: FiniteMotion, folder, frames: int 
     for k, s in enumerate(np.linspace(result.start, last, frames) if frames > 1 else [last]):
         target = folder / f"frame_{k:03d}.{kind}"
         at = moved(assembly, result.path, float(s))
-        written.append(render(at, target, title=f"s = {s:.4g}") if kind == "png" else export(at, target))
+        written.append(render(at, target, title=f"s = {s:.4g}") if kind == "png" else write(at, target))
     return written

@@ -173,6 +173,14 @@ def test_unstable_result_has_no_forces():
     assert "RBE has no equilibrium" in result.message
 
 
+@pytest.mark.parametrize("tilt, status", [(15.0, "stable"), (25.0, "unstable")])
+def test_a_result_has_no_bool_it_says_to_use_stable(tilt, status):
+    result = cra(_stack((1.0, 3.0)), mu=1.0, gravity=tilted_gravity("x", tilt))  # it tips at 18.4 deg
+    assert result.status == status
+    with pytest.raises(TypeError, match=r"truth value of a CRAResult is ambiguous .*use result\.stable"):
+        bool(result)
+
+
 def test_block_between_walls_falls_under_cra_not_rbe():
     walls = [trimesh.creation.box(bounds=b) for b in ([[-1, 0, 0], [0, 1, 2]], [[1, 0, 0], [2, 1, 2]])]
     middle = trimesh.creation.box(bounds=[[0, 0, 1], [1, 1, 2]])

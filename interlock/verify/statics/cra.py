@@ -188,6 +188,10 @@ class CRAResult:
     def stable(self) -> bool | None:
         return {"stable": True, "unstable": False}.get(self.status)
 
+    def __bool__(self):
+        raise TypeError("the truth value of a CRAResult is ambiguous (it may be inconclusive): use "
+                        "result.stable, which is True, False or None (inconclusive), or result.status")
+
     def __str__(self) -> str:
         p = self.parameters
         return (f"CRA {self.status} (mu {p.get('mu')}, {p.get('cone')} cone with {p.get('sides')} sides, "
