@@ -96,6 +96,28 @@ def _commands() -> list[tuple[str, str]]:
     return out
 
 
+#: The exit status of ``verify`` and ``periodic`` by the first word of the verdict they print (``interlock verify
+#: --help``): 0 interlocked, 1 not interlocked, 3 inconclusive; the other commands exit 0 when they succeed.
+VERDICT_STATUS = {"interlocked": 0, "not": 1, "inconclusive": 3}
+
+
+def _documented_status(argv: list[str], shown: str) -> int:
+    """The exit status the README's shown output documents for the command ``argv``."""
+    if argv[0] not in ("verify", "periodic"):
+        return 0
+    first = shown.split(maxsplit=1)[0].rstrip(":,") if shown else ""
+    assert first in VERDICT_STATUS, f"interlock {argv[0]} shows no verdict to read its exit status from: {shown!r}"
+    return VERDICT_STATUS[first]
+
+
+def test_the_documented_status_is_read_from_the_verdict_shown():
+    assert _documented_status(["verify"], "interlocked, certified: ...") == 0
+    assert _documented_status(["periodic"], "not interlocked: one cell ...") == 1
+    assert _documented_status(["verify"], "not infinitesimally interlocked: ...") == 1
+    assert _documented_status(["verify"], "inconclusive: time limit reached ...") == 3
+    assert _documented_status(["generate"], "wrote p4.stl: 69 blocks, 24 in the frame") == 0
+
+
 @pytest.mark.parametrize("command, shown", _commands(), ids=[c for c, _ in _commands()])
 def test_the_commands_of_the_readme_print_what_it_shows(command, shown, reference_data, tmp_path):
     import contextlib
@@ -111,5 +133,6 @@ def test_the_commands_of_the_readme_print_what_it_shows(command, shown, referenc
         argv[1:1] = [str(bunny / f"part_{k}.obj") for k in range(1, 81)]
     printed = io.StringIO()
     with contextlib.redirect_stdout(printed):
-        assert main(argv) == 0
+        status = main(argv)
+    assert status == _documented_status(argv, shown), (status, shown, printed.getvalue())
     assert _matches(shown, printed.getvalue().strip().split("\ntimings:")[0]), (shown, printed.getvalue())

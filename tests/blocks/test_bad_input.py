@@ -2,16 +2,16 @@
 
 import pytest
 
+import interlock
 from interlock import InterlockError, wallpaper
-from interlock.blocks import Assembly, escher_block, patch, random_hexagon, rhomblock_assembly
-from interlock.gallery import export
+from interlock.blocks import escher_block, patch, random_hexagon, rhomblock_assembly
 
 
 @pytest.fixture(scope="module")
 def files(tmp_path_factory):
     folder = tmp_path_factory.mktemp("bad")
     hexagon = rhomblock_assembly(random_hexagon(3, 3, 3, seed=0), 0, frame="boundary")
-    vtu, obj, stl = (export(hexagon, folder / f"h.{kind}").read_bytes() for kind in ("vtu", "obj", "stl"))
+    vtu, obj, stl = (interlock.write(hexagon, folder / f"h.{kind}").read_bytes() for kind in ("vtu", "obj", "stl"))
     (folder / "empty.vtu").write_bytes(b"")
     (folder / "empty.xdmf").write_bytes(b"")
     (folder / "half.vtu").write_bytes(vtu[:len(vtu) // 2])
@@ -36,19 +36,19 @@ def files(tmp_path_factory):
 ])
 def test_a_bad_file_is_an_error_that_names_the_problem(files, name, message, capsys):
     with pytest.raises(InterlockError, match=message):
-        Assembly.load(files / name)
+        interlock.read(files / name)
     assert capsys.readouterr() == ("", "")  # meshio's own printing silenced
 
 
 def test_the_first_half_of_an_obj_export_does_not_load_as_some_of_its_blocks(files):
     with pytest.raises(InterlockError, match="27 blocks of 432 triangles in all, it holds 14 objects"):
-        Assembly.load(files / "half.obj")
+        interlock.read(files / "half.obj")
 
 
 @pytest.mark.parametrize("paths", [None, 42, [1, "a.obj"]])
 def test_load_of_something_that_is_not_a_path_is_an_assembly_error(paths):
-    with pytest.raises(InterlockError, match="Assembly.load needs a file path"):
-        Assembly.load(paths)
+    with pytest.raises(InterlockError, match="needs a file path"):
+        interlock.read(paths)
 
 
 def test_escher_points_that_are_not_numbers_are_a_deformation_error():
@@ -79,4 +79,4 @@ def test_an_obj_export_whose_header_is_damaged_is_refused(files):
     text = (files / "half.obj").read_text()
     (files / "no-header.obj").write_text(text.replace("interlock blocks=27", "interlock blocks~27", 1))
     with pytest.raises(InterlockError, match="header .* is damaged, so it cannot tell whether it is whole"):
-        Assembly.load(files / "no-header.obj")
+        interlock.read(files / "no-header.obj")
