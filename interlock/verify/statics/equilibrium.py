@@ -178,7 +178,10 @@ class EquilibriumSystem:
     timings: dict
 
     @classmethod
-    def build(cls, assembly, mu, density, frame, cone, sides, contacts) -> EquilibriumSystem:
+    def build(cls, assembly, mu, density, frame, cone, sides, contacts, budget=None) -> EquilibriumSystem:
+        """The system of ``assembly``'s equilibrium.  With a ``budget``, the contact search runs under it; when
+        it runs out there, the system has no contacts and :meth:`solve` under the same budget answers
+        "inconclusive: time limit reached in the contacts" (never "unstable")."""
         if not isinstance(assembly, Assembly):
             raise StabilityError(f"expected an interlock Assembly, got {type(assembly).__name__}")
         mu, density = friction_coefficient(mu), block_densities(density, len(assembly))
@@ -191,7 +194,10 @@ class EquilibriumSystem:
             raise StabilityError("the assembly has no frame: give the fixed blocks (supports) with frame=[...] "
                                  "or Assembly.with_frame; without supports nothing can carry the weight")
         started = time.perf_counter()
-        found, contact_model = statics_contacts(assembly, contacts)
+        try:
+            found, contact_model = statics_contacts(assembly, contacts, budget)
+        except TimeLimitReached:
+            found, contact_model = (), {"model": "not found: time limit reached in the contacts"}
         found_at = time.perf_counter()
         free = np.setdiff1d(np.arange(len(assembly)), fixed)
         column_of = np.full(len(assembly), -1)

@@ -125,7 +125,7 @@ def thickness(assembly: Assembly) -> np.ndarray:
 
 
 def interfaces(assembly: Assembly, gap: float = DEFAULT_GAP_THICKNESS, area: float = DEFAULT_AREA_THICKNESS,
-               rtol: float = DEFAULT_CONTACT_RTOL, involving=None) -> Interfaces:
+               rtol: float = DEFAULT_CONTACT_RTOL, involving=None, budget=None) -> Interfaces:
     """Contacts between faces that face each other across small gaps and tilts, relative to each pair's thickness.
 
     For blocks ``i < j`` with ``t = min(thickness_i, thickness_j)``
@@ -203,7 +203,7 @@ def interfaces(assembly: Assembly, gap: float = DEFAULT_GAP_THICKNESS, area: flo
         return empty
     length = assembly.scale
     found = find_contacts(assembly, rtol=rtol, angle_tol=max(angle, 1e-12), gap=gap * float(widths.max()) / length,
-                          area_rtol=area * float(widths.min()) ** 2 / length ** 2, involving=involving)
+                          area_rtol=area * float(widths.min()) ** 2 / length ** 2, involving=involving, budget=budget)
     kept = {}
     for c in found:
         t = min(widths[c.i], widths[c.j])
@@ -213,7 +213,7 @@ def interfaces(assembly: Assembly, gap: float = DEFAULT_GAP_THICKNESS, area: flo
     # larger angle, so a face bent by less than it falls apart into triangles (the same union, more polygons;
     # the bridge: 37 contacts -> 65)
     touching = {}
-    for c in find_contacts(assembly, rtol=rtol, involving=involving):
+    for c in find_contacts(assembly, rtol=rtol, involving=involving, budget=budget):
         t = min(widths[c.i], widths[c.j])
         if c.area > area * t * t:
             touching.setdefault((c.i, c.j), []).append(c)
@@ -225,7 +225,7 @@ def interfaces(assembly: Assembly, gap: float = DEFAULT_GAP_THICKNESS, area: flo
                       area, rtol)
 
 
-def statics_contacts(assembly: Assembly, contacts=None) -> tuple[tuple, dict]:
+def statics_contacts(assembly: Assembly, contacts=None, budget=None) -> tuple[tuple, dict]:
     """The contacts RBE and CRA use, and how they were found (for the result's ``parameters["contacts"]``).
 
     ``contacts`` is ``None`` or ``"interfaces"`` (:func:`interfaces` with its
@@ -234,12 +234,17 @@ def statics_contacts(assembly: Assembly, contacts=None) -> tuple[tuple, dict]:
     :class:`~interlock.blocks.contact.Contact` (given; e.g. :func:`compas_interfaces`).
     Blocks that overlap deeper than the interface rule allows are refused (:func:`refuse_deep_overlaps`), and
     with interfaces also blocks that overlap deeper than the exact contacts' tolerance without an interface
-    between them (:func:`~interlock.verify.validate.refuse_overlaps_without_contact`).
+    between them (:func:`~interlock.verify.validate.refuse_overlaps_without_contact`).  The search and the overlap
+    test run under ``budget`` (TimeLimitReached, "the contacts").
     """
     if contacts is None or (isinstance(contacts, str) and contacts == "interfaces"):
-        contacts = interfaces(assembly)
-    found, model = _statics_contacts(assembly, contacts)
+        contacts = interfaces(assembly, budget=budget)
+    found, model = _statics_contacts(assembly, contacts, budget)
+    if budget is not None:
+        budget.check("the contacts")
     overlapping = pair_overlaps(assembly)
+    if budget is not None:
+        budget.check("the contacts")
     if isinstance(contacts, Interfaces):  # the rule meets faces across overlaps, so an overlap must be one
         refuse_deep_overlaps(assembly, contacts.gap, contacts.thickness, overlapping)
         refuse_overlaps_without_contact(assembly, overlapping, found, DEFAULT_CONTACT_RTOL * assembly.scale)
@@ -248,14 +253,14 @@ def statics_contacts(assembly: Assembly, contacts=None) -> tuple[tuple, dict]:
     return found, model
 
 
-def _statics_contacts(assembly: Assembly, contacts) -> tuple[tuple, dict]:
+def _statics_contacts(assembly: Assembly, contacts, budget=None) -> tuple[tuple, dict]:
     if isinstance(contacts, Interfaces):
         return contacts.contacts, contacts.to_dict()
     if isinstance(contacts, str):
         if contacts != "exact":
             raise InterfaceError(f"contacts must be one of {CONTACT_MODELS}, Interfaces or a sequence of Contact, "
                                  f"got {contacts!r}")
-        found = find_contacts(assembly)
+        found = find_contacts(assembly, budget=budget)
         return found, {"model": "exact", "contacts": len(found)}
     found = tuple(contacts)
     if not all(isinstance(c, Contact) for c in found):

@@ -99,5 +99,5 @@ def rbe(assembly: Assembly, mu: float, density: float = 1.0, gravity=(0.0, 0.0, 
     """
     budget = Budget.start(time_limit)
     gravity = gravity_vector(gravity)
-    system = EquilibriumSystem.build(assembly, mu, density, frame, cone, sides, contacts)
+    system = EquilibriumSystem.build(assembly, mu, density, frame, cone, sides, contacts, budget)
     return system.solve(gravity, budget)
