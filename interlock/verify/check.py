@@ -28,6 +28,8 @@ from interlock.verify.load_paths import load_path_bound
 from interlock.verify.margin import Margin, assess, row_tolerances
 from interlock.verify.precision import PRECISION_FACTOR, Precision, block_precision
 from interlock.verify.matrix import InterlockingMatrix, interlocking_matrix
+from interlock.verify.tolerances import (COARSE_RATIO, NOISE_CONTACTS, NOISE_SPREAD, block_noise, coarsest,
+                                        contact_tolerances, tolerance_source, too_coarse)
 from interlock.verify.validate import refuse_overlaps_without_contact, validate as check_overlaps
 
 __all__ = ["Verdict", "check", "beyond_first_order", "block_noise", "opening_motion", "contact_tolerances",
@@ -43,16 +45,7 @@ RANK_RTOL = 1e-9
 LP_SOLVERS = ("clarabel", "highs")
 #: The stages of :func:`check`, in order, as reported to its ``progress`` callback and in ``timings``.
 STAGES = ("validate", "contacts", "matrix", "rank", "lp", "margin", "motion", "certify", "beyond")
-#: An input whose tolerance reaches this share of a contact's size (the square root of its area) is too coarse to
-#: decide where the margin does not: the 4-digit bunny's faces are bent by 0.0036 on contacts 0.06 across.
-COARSE_RATIO = 0.01
 
-#: A block's noise is read (:func:`block_noise`) from at least this many contacts: the median of fewer would
-#: take a designed fold of one face for noise.
-NOISE_CONTACTS = 3
-#: A bend up to this many times the sum of its blocks' median noise is noise: single bends spread about the median
-#: (the TopoLite cube with Gaussian vertex noise: a bend of 4.3e-9 between blocks of median 2.4e-9 and 1.6e-9).
-NOISE_SPREAD = 2.0
 
 
 @dataclass(frozen=True)
@@ -280,7 +273,7 @@ def _decide(assembly, frame, translational, certify, rank_rtol, lp_tol, contacts
     kinds, contacts = (contacts, None) if isinstance(contacts, str) else ("all", contacts)  # the contact model
     precision = block_precision(assembly)
     distance = search_distances(assembly, precision)
-    coarse = _too_coarse(assembly, frame, precision)
+    coarse = too_coarse(assembly, frame, precision)
     if coarse is not None:
         return Verdict(None, coarse, frame=tuple(assembly.block_indices(assembly.frame if frame is None else frame)),
                        shape=(0, 0), rank=0, lp_value=None, translational=translational, timings=timings, order=order,
@@ -388,10 +381,10 @@ def _decide(assembly, frame, translational, certify, rank_rtol, lp_tol, contacts
                           stress=stress, **base)
     if verdict.interlocked is True:
         with _stage(timings, "margin", progress, budget):
-            source = "given" if tolerance is not None else _tolerance_source(found, A, precision)
+            source = "given" if tolerance is not None else tolerance_source(found, A, precision)
             verdict = _with_margin(verdict, assess(A, found, assembly.block_size, stress, limits, source,
                                                    per_contact=True, budget=budget), A, len(assembly),
-                                   _coarsest(found, A, limits) if tolerance is None else None)
+                                   coarsest(found, A, limits) if tolerance is None else None)
             verdict = _with_play(verdict, A, found, budget)
     if verdict.motion is not None and verdict.motion_kind == "within tolerance":
         # a motion the tolerances leave open: moved for real, it either shows the blocks coming apart or collides
@@ -529,89 +522,6 @@ def _stage(timings: dict, name: str, progress, budget: Budget | None = None):
 # --- numerics ---------------------------------------------------------------------
 
 
-def _too_coarse(assembly: Assembly, frame, precision: Precision) -> str | None:
-    """Why the input is too coarse to decide, or None: a free block, or a neighbour of one, whose coordinates'
-    rounding (times :data:`~interlock.verify.precision.PRECISION_FACTOR`) reaches :data:`COARSE_RATIO` of its size.
-
-    Float32 coordinates 1e6 model sizes from the origin round a unit cube's corners by 0.25: no contact survives,
-    and any verdict would be about geometry the file does not hold.
-    """
-    fixed = set(assembly.block_indices(assembly.frame if frame is None else frame))
-    free = [b for b in range(len(assembly)) if b not in fixed]
-    graph = assembly.neighbours
-    near = sorted(set(free).union(*(graph[b] for b in free)))
-    if not near:
-        return None
-    near = np.asarray(near)
-    ratio = PRECISION_FACTOR * precision.delta[near] / assembly.block_sizes[near]
-    worst = int(near[np.argmax(ratio)])
-    if ratio.max() < COARSE_RATIO:
-        return None
-    remedy = ("move the model near the origin or store it in float64" if "float" in precision.source[worst]
-              else "write its coordinates with more digits")
-    return (f"the file's precision {PRECISION_FACTOR * precision.delta[worst]:.2g} "
-            f"({precision.source[worst]} at coordinates up to {np.abs(assembly.bounds[worst]).max():.3g}) is coarser "
-            f"than its blocks: block {worst} is {assembly.block_sizes[worst]:.3g} across; {remedy}")
-
-
-def contact_tolerances(found, precision: Precision, tolerance=None, bends: bool = True) -> np.ndarray:
-    """One length per contact: how far the real faces may be from the modelled contact.
-
-    ``tolerance`` given: that length for every contact.  Otherwise each
-    contact's own :attr:`~interlock.verify.contacts.Contact.tolerance` (the
-    rounding of its two blocks, plus twice the bend of faces bent within the
-    tolerances), or, for contacts given by hand, the rounding of its blocks
-    (:meth:`~interlock.verify.precision.Precision.contact_tolerance`); and at
-    least :data:`NOISE_SPREAD` times the sum of its blocks' noise
-    (:func:`block_noise`: a noisy mesh shows its noise only on faces of
-    several triangles).
-    ``bends=False``: the rounding alone (what the numbers show, without the allowance for computed geometry:
-    :meth:`~interlock.verify.precision.Precision.contact_tolerance`).
-    """
-    if tolerance is not None:
-        return np.full(len(found), float(tolerance))
-    rounding = np.array([precision.contact_tolerance(c.i, c.j) for c in found], dtype=float)
-    if len(found):  # vertex noise of either block moves the contact: the sum of the blocks' noise, and its spread
-        noise = NOISE_SPREAD * block_noise(found)
-        rounding = np.maximum(rounding, np.array([noise[c.i] + noise[c.j] for c in found]))
-    if not bends:
-        return rounding
-    own = np.array([np.nan if c.tolerance is None else c.tolerance for c in found], dtype=float)
-    return np.where(np.isnan(own), rounding, np.maximum(own, rounding))
-
-
-def block_noise(found) -> np.ndarray:
-    """Per block (indexed up to the largest in ``found``): the median bend of its contacts' faces, a length.
-
-    A noisy mesh bends nearly every face of several triangles by about its noise, and leaves single triangles
-    planar however noisy it is: the median :attr:`~interlock.blocks.contact.Contact.deviation` over a block's
-    contacts reads that noise.  A bend only some faces show (a fold of a designed face) is geometry, not noise,
-    and leaves the median at 0.  Fewer than :data:`NOISE_CONTACTS` contacts read no noise (0).
-
-    Examples
-    --------
-    >>> from types import SimpleNamespace as Found
-    >>> found = [Found(i=0, j=k, deviation=d) for k, d in ((1, 1e-9), (2, 2e-9), (3, 3e-9), (4, 1e-7))]
-    >>> block_noise(found).tolist()  # block 0 reads its noise; the others have one contact each
-    [2.5e-09, 0.0, 0.0, 0.0, 0.0]
-    """
-    blocks = 1 + max(max(c.i, c.j) for c in found)
-    bends = [[] for _ in range(blocks)]
-    for c in found:
-        bends[c.i].append(c.deviation)
-        bends[c.j].append(c.deviation)
-    return np.array([float(np.median(b)) if len(b) >= NOISE_CONTACTS else 0.0 for b in bends])
-
-
-def _tolerance_source(found, A: InterlockingMatrix, precision: Precision) -> str:
-    """Where the tolerances of the contacts of free blocks came from, in words ("float32 input; faces bent ...")."""
-    free = set(A.free.tolist())
-    moving = [c for c in found if c.i in free or c.j in free]
-    source = precision.describe(sorted({b for c in moving for b in (c.i, c.j)}))
-    bends = [c.deviation for c in moving if not c.planar and c.deviation > precision.contact_tolerance(c.i, c.j)]
-    return source + (f"; faces bent by up to {max(bends):.2g}" if bends else "")
-
-
 def _with_play(verdict: Verdict, A: InterlockingMatrix, found, budget: Budget | None = None) -> Verdict:
     """An "interlocked" verdict on contacts across gaps, with the play the gaps allow to first order.
 
@@ -642,15 +552,6 @@ def _unless_missed(verdict: Verdict, assembly: Assembly, precision: Precision, t
     # the rounding alone: unless_missed adds each contact's bend itself, and judges slides across faces bent beyond it
     return unless_missed(verdict, assembly, reference,
                          contact_tolerances(reference, precision, tolerance, bends=False))
-
-
-def _coarsest(found, A: InterlockingMatrix, limits: np.ndarray):
-    """``(tolerance, size)`` of the contact of a free block whose tolerance is largest against its size (the square
-    root of its area), or None when no contact has an area."""
-    free = set(A.free.tolist())
-    ratios = [(t / math.sqrt(c.area), t, math.sqrt(c.area)) for c, t in zip(found, limits)
-              if (c.i in free or c.j in free) and c.area > 0]
-    return max(ratios)[1:] if ratios else None
 
 
 def _with_margin(verdict: Verdict, margin: Margin, A: InterlockingMatrix, blocks: int, coarsest=None) -> Verdict:

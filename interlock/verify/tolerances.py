@@ -1,0 +1,119 @@
+"""How far each contact may be from the input's faces: the tolerances a verdict of :func:`~interlock.verify.check`
+uses, read off each contact and its blocks, never off the scene (docs/interlocking.md, "Tolerances that follow the
+contact")."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from interlock.blocks.assembly import Assembly
+from interlock.verify.matrix import InterlockingMatrix
+from interlock.verify.precision import PRECISION_FACTOR, Precision
+
+__all__ = ["contact_tolerances", "block_noise", "too_coarse", "tolerance_source", "coarsest", "COARSE_RATIO",
+           "NOISE_CONTACTS", "NOISE_SPREAD"]
+
+#: An input whose tolerance reaches this share of a contact's size (the square root of its area) is too coarse to
+#: decide where the margin does not: the 4-digit bunny's faces are bent by 0.0036 on contacts 0.06 across.
+COARSE_RATIO = 0.01
+#: A block's noise is read (:func:`block_noise`) from at least this many contacts: the median of fewer would
+#: take a designed fold of one face for noise.
+NOISE_CONTACTS = 3
+#: A bend up to this many times the sum of its blocks' median noise is noise: single bends spread about the median
+#: (the TopoLite cube with Gaussian vertex noise: a bend of 4.3e-9 between blocks of median 2.4e-9 and 1.6e-9).
+NOISE_SPREAD = 2.0
+
+
+def too_coarse(assembly: Assembly, frame, precision: Precision) -> str | None:
+    """Why the input is too coarse to decide, or None: a free block, or a neighbour of one, whose coordinates'
+    rounding (times :data:`~interlock.verify.precision.PRECISION_FACTOR`) reaches :data:`COARSE_RATIO` of its size.
+
+    Float32 coordinates 1e6 model sizes from the origin round a unit cube's corners by 0.25: no contact survives,
+    and any verdict would be about geometry the file does not hold.
+    """
+    fixed = set(assembly.block_indices(assembly.frame if frame is None else frame))
+    free = [b for b in range(len(assembly)) if b not in fixed]
+    graph = assembly.neighbours
+    near = sorted(set(free).union(*(graph[b] for b in free)))
+    if not near:
+        return None
+    near = np.asarray(near)
+    ratio = PRECISION_FACTOR * precision.delta[near] / assembly.block_sizes[near]
+    worst = int(near[np.argmax(ratio)])
+    if ratio.max() < COARSE_RATIO:
+        return None
+    remedy = ("move the model near the origin or store it in float64" if "float" in precision.source[worst]
+              else "write its coordinates with more digits")
+    return (f"the file's precision {PRECISION_FACTOR * precision.delta[worst]:.2g} "
+            f"({precision.source[worst]} at coordinates up to {np.abs(assembly.bounds[worst]).max():.3g}) is coarser "
+            f"than its blocks: block {worst} is {assembly.block_sizes[worst]:.3g} across; {remedy}")
+
+
+def contact_tolerances(found, precision: Precision, tolerance=None, bends: bool = True) -> np.ndarray:
+    """One length per contact: how far the real faces may be from the modelled contact.
+
+    ``tolerance`` given: that length for every contact.  Otherwise each
+    contact's own :attr:`~interlock.verify.contacts.Contact.tolerance` (the
+    rounding of its two blocks, plus twice the bend of faces bent within the
+    tolerances), or, for contacts given by hand, the rounding of its blocks
+    (:meth:`~interlock.verify.precision.Precision.contact_tolerance`); and at
+    least :data:`NOISE_SPREAD` times the sum of its blocks' noise
+    (:func:`block_noise`: a noisy mesh shows its noise only on faces of
+    several triangles).
+    ``bends=False``: the rounding alone (what the numbers show, without the allowance for computed geometry:
+    :meth:`~interlock.verify.precision.Precision.contact_tolerance`).
+    """
+    if tolerance is not None:
+        return np.full(len(found), float(tolerance))
+    rounding = np.array([precision.contact_tolerance(c.i, c.j) for c in found], dtype=float)
+    if len(found):  # vertex noise of either block moves the contact: the sum of the blocks' noise, and its spread
+        noise = NOISE_SPREAD * block_noise(found)
+        rounding = np.maximum(rounding, np.array([noise[c.i] + noise[c.j] for c in found]))
+    if not bends:
+        return rounding
+    own = np.array([np.nan if c.tolerance is None else c.tolerance for c in found], dtype=float)
+    return np.where(np.isnan(own), rounding, np.maximum(own, rounding))
+
+
+def block_noise(found) -> np.ndarray:
+    """Per block (indexed up to the largest in ``found``): the median bend of its contacts' faces, a length.
+
+    A noisy mesh bends nearly every face of several triangles by about its noise, and leaves single triangles
+    planar however noisy it is: the median :attr:`~interlock.blocks.contact.Contact.deviation` over a block's
+    contacts reads that noise.  A bend only some faces show (a fold of a designed face) is geometry, not noise,
+    and leaves the median at 0.  Fewer than :data:`NOISE_CONTACTS` contacts read no noise (0).
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace as Found
+    >>> found = [Found(i=0, j=k, deviation=d) for k, d in ((1, 1e-9), (2, 2e-9), (3, 3e-9), (4, 1e-7))]
+    >>> block_noise(found).tolist()  # block 0 reads its noise; the others have one contact each
+    [2.5e-09, 0.0, 0.0, 0.0, 0.0]
+    """
+    blocks = 1 + max(max(c.i, c.j) for c in found)
+    bends = [[] for _ in range(blocks)]
+    for c in found:
+        bends[c.i].append(c.deviation)
+        bends[c.j].append(c.deviation)
+    return np.array([float(np.median(b)) if len(b) >= NOISE_CONTACTS else 0.0 for b in bends])
+
+
+def tolerance_source(found, A: InterlockingMatrix, precision: Precision) -> str:
+    """Where the tolerances of the contacts of free blocks came from, in words ("float32 input; faces bent ...")."""
+    free = set(A.free.tolist())
+    moving = [c for c in found if c.i in free or c.j in free]
+    source = precision.describe(sorted({b for c in moving for b in (c.i, c.j)}))
+    bends = [c.deviation for c in moving if not c.planar and c.deviation > precision.contact_tolerance(c.i, c.j)]
+    return source + (f"; faces bent by up to {max(bends):.2g}" if bends else "")
+
+
+def coarsest(found, A: InterlockingMatrix, limits: np.ndarray):
+    """``(tolerance, size)`` of the contact of a free block whose tolerance is largest against its size (the square
+    root of its area), or None when no contact has an area."""
+    free = set(A.free.tolist())
+    ratios = [(t / math.sqrt(c.area), t, math.sqrt(c.area)) for c, t in zip(found, limits)
+              if (c.i in free or c.j in free) and c.area > 0]
+    return max(ratios)[1:] if ratios else None
+
