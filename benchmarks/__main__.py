@@ -7,12 +7,14 @@ Each module writes ``<name>.json`` (machine, versions, medians, ratios) and
 import argparse
 import time
 
-from benchmarks import (accuracy, beyond, certify, degeneracy, gallery, periodic, rhomblock, scaling, stability, sweep,
-                        verify, wallpaper)
+from benchmarks import (accuracy, beyond, certify, contact_kinds, degeneracy, gallery, periodic, rhomblock, scaling,
+                        stability, sweep, verify, wallpaper)
 from benchmarks.common import add_arguments, use_results_folder
 
+#: ``view`` is left out: it needs chromium and chromedriver (``python -m benchmarks.view``), and without them it
+#: fails (selenium: "Binary Location Must be a String") instead of skipping.
 MODULES = (wallpaper, rhomblock, verify, scaling, certify, periodic, accuracy, degeneracy, gallery, stability, sweep,
-           beyond)
+           beyond, contact_kinds)
 
 parser = argparse.ArgumentParser(prog="python -m benchmarks", description="Run every benchmark.")
 add_arguments(parser)

@@ -45,7 +45,7 @@ import scipy.sparse as sp
 import shapely
 
 from benchmarks.common import REFERENCE_DATA, limited_blas, main, write_json
-from interlock.blocks import load_compas
+import interlock
 from interlock.blocks.contact import Contact, plane_bases
 from interlock.verify.statics import cra
 from interlock.verify.statics.cra import CRAProblem
@@ -166,7 +166,7 @@ def _solve(cost, constraints, right, equalities: int = 0):
 
 
 def run(quick: bool = False) -> dict:
-    assembly = load_compas(REFERENCE_DATA / "compas_cra" / "armadillo.json")
+    assembly = interlock.read(REFERENCE_DATA / "compas_cra" / "armadillo.json")
     found = interfaces(assembly)
     pairs = defaultdict(int)
     for c in found.contacts:

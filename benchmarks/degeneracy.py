@@ -102,10 +102,10 @@ from scipy.spatial.transform import Rotation
 
 from benchmarks.common import (REFERENCE_DATA, add_arguments, pyplot, results_folder, save_chart,
                                use_results_folder, write_json)
+import interlock
 from interlock import wallpaper
 from interlock.blocks import Assembly, escher_block, patch, periodic_cell, presets
 from interlock.errors import InterlockError
-from interlock.gallery import export
 from interlock.verify import check, contacts, criterion_4_3, periodic_check
 
 DELTAS = tuple(10.0**-k for k in range(1, 15)) + (0.0,)
@@ -287,7 +287,7 @@ def _family_b(epsilons) -> dict:
 
 def _bunny() -> Assembly:
     folder = REFERENCE_DATA / "topolite" / "bunny"
-    return Assembly.load([folder / f"part_{k}.obj" for k in range(1, 81)], frame=())
+    return interlock.read([folder / f"part_{k}.obj" for k in range(1, 81)], frame=())
 
 
 def _float32_bunny(bunny: Assembly, seed: int) -> Assembly:
@@ -296,8 +296,8 @@ def _float32_bunny(bunny: Assembly, seed: int) -> Assembly:
     turned = Assembly.from_meshes([trimesh.Trimesh(m.vertices @ turn.T, m.faces) for m in bunny.world_meshes()])
     with tempfile.TemporaryDirectory() as folder:
         path = Path(folder) / "bunny.stl"
-        export(turned, path)
-        return Assembly.load(path, frame=())
+        interlock.write(turned, path)
+        return interlock.read(path, frame=())
 
 
 def _noisy_bunny(bunny: Assembly, amplitude: float) -> Assembly:

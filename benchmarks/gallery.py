@@ -2,7 +2,7 @@
 
 Per gallery entry the time of each stage (generate, finite verdict, periodic
 verdict, export, render) comes from the entries' records; the export of the
-4,800-block assembly is timed per format, and its picture (``render``, small
+4,800-block assembly (:func:`interlock.write`) is timed per format, and its picture (``render``, small
 size), as medians of several runs.  (The tests assert what these write, not how
 fast.)
 """
@@ -14,7 +14,8 @@ from pathlib import Path
 
 from benchmarks.common import main, median_time, pyplot, save_chart, write_json
 from interlock.blocks import random_hexagon, rhomblock_assembly
-from interlock.gallery import build, export, render
+from interlock.formats import write
+from interlock.gallery import build, render
 
 
 
@@ -35,7 +36,7 @@ def run(quick: bool = False) -> dict:
         exports = {}
         for suffix in (".stl", ".glb", ".3mf", ".vtu"):
             path = Path(folder) / f"big{suffix}"
-            exports[suffix] = median_time(lambda: export(assembly, path), 3)
+            exports[suffix] = median_time(lambda: write(assembly, path), 3)
             print(f"export {len(assembly)} RhomBlocks to {suffix}: {exports[suffix]:.2f} s "
                   f"({path.stat().st_size / 1e6:.1f} MB)")
         picture = Path(folder) / "big.png"

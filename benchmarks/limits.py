@@ -56,11 +56,11 @@ DRIVER = ("import io, contextlib, sys, time, json\n"
 
 def _model(n: int, folder: Path) -> Path:
     from interlock.blocks import random_hexagon, rhomblock_assembly
-    from interlock.gallery import export
+    from interlock.formats import write
 
     path = folder / f"hexagon-{n}.obj"
     if not path.exists():
-        export(rhomblock_assembly(random_hexagon(n, n, n, seed=0), 0, frame="boundary"), path)
+        write(rhomblock_assembly(random_hexagon(n, n, n, seed=0), 0, frame="boundary"), path)
     return path
 
 

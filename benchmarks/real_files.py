@@ -22,8 +22,8 @@ translation of 1 to 300 model sizes in a random direction, seeded numpy
 - ``float64``: the placement alone (a control: rigid motions must not change
   a verdict);
 - ``float32 STL`` / ``PLY`` / ``GLB``: written with
-  :func:`interlock.gallery.export.export` and read back with
-  :meth:`Assembly.load` (32-bit coordinates; interlock's PLY holds doubles,
+  :func:`interlock.write` and read back with
+  :func:`interlock.read` (32-bit coordinates; interlock's PLY holds doubles,
   so for PLY the vertices are rounded to float32 first, as other tools'
   PLY files hold them);
 - ``4`` / ``6`` / ``7 digits``: an OBJ file with one object per block and
@@ -91,9 +91,9 @@ import trimesh
 from scipy.spatial.transform import Rotation
 
 from benchmarks.common import REFERENCE_DATA, add_arguments, pyplot, save_chart, use_results_folder, write_json
+import interlock
 from interlock.blocks import Assembly
 from interlock.errors import InterlockError
-from interlock.gallery import export
 from interlock.verify import check
 from interlock.verify.motion import OVERLAP_RTOL, finite_motion
 
@@ -129,8 +129,8 @@ GEOCOMB_QUICK = ("[-05,05]", "[025,025]")
 def _topolite_ti(model: str) -> Assembly:
     """A TopoLite shell: ``Part_NN.obj`` then the bodies of ``Boundary.obj`` (the frame, last)."""
     folder = SHARED_DATA / "topolite_ti" / model / "PartGeometry"
-    parts = Assembly.load(sorted(folder.glob("Part_*.obj")), frame=())
-    boundary = Assembly.load(folder / "Boundary.obj", frame=())
+    parts = interlock.read(sorted(folder.glob("Part_*.obj")), frame=())
+    boundary = interlock.read(folder / "Boundary.obj", frame=())
     meshes = list(parts.world_meshes()) + list(boundary.world_meshes())
     return Assembly.from_meshes(meshes, frame=range(len(parts), len(meshes)))
 
@@ -140,9 +140,9 @@ def subjects(quick: bool = False, large: bool = False) -> dict:
     bunny = REFERENCE_DATA / "topolite" / "bunny"
     cube = REFERENCE_DATA / "topolite" / "cube"
     out = {
-        "bunny": (lambda: Assembly.load([bunny / f"part_{k}.obj" for k in range(1, 81)], frame=()),
+        "bunny": (lambda: interlock.read([bunny / f"part_{k}.obj" for k in range(1, 81)], frame=()),
                   {"{0, 1}": ((0, 1), True), "{0}": ((0,), False), "{1}": ((1,), False)}),
-        "TopoLite cube": (lambda: Assembly.load([cube / f"part_{k}.obj" for k in range(1, 10)], frame=()),
+        "TopoLite cube": (lambda: interlock.read([cube / f"part_{k}.obj" for k in range(1, 10)], frame=()),
                           {"{0, 8}": ((0, 8), True), "{8}": ((8,), False)}),
     }
     ti = SHARED_DATA / "topolite_ti"
@@ -156,7 +156,7 @@ def subjects(quick: bool = False, large: bool = False) -> dict:
     for path in sorted(geocomb.glob("*.obj")):
         if quick and path.stem not in GEOCOMB_QUICK:
             continue
-        out[f"GeoComb {path.stem}"] = (lambda path=path: Assembly.load(path, frame=()),
+        out[f"GeoComb {path.stem}"] = (lambda path=path: interlock.read(path, frame=()),
                                        {"1-8": (tuple(range(1, 9)), True)})
     return out
 
@@ -189,7 +189,7 @@ def _placed_meshes(assembly: Assembly, motion: np.ndarray) -> list[trimesh.Trime
 
 
 def _read_back(meshes, frame, suffix: str) -> Assembly:
-    """Write the blocks with :func:`export` and read them back.
+    """Write the blocks with :func:`interlock.write` and read them back.
 
     interlock writes PLY coordinates as doubles; other tools write floats, so for PLY the vertices are
     rounded to float32 first.
@@ -199,8 +199,8 @@ def _read_back(meshes, frame, suffix: str) -> Assembly:
                   for m in meshes]
     with tempfile.TemporaryDirectory() as folder:
         path = Path(folder) / f"blocks{suffix}"
-        export(Assembly.from_meshes(meshes, frame=frame), path)
-        return Assembly.load(path)
+        interlock.write(Assembly.from_meshes(meshes, frame=frame), path)
+        return interlock.read(path)
 
 
 def _digits(meshes, frame, digits: int) -> Assembly:
@@ -214,7 +214,7 @@ def _digits(meshes, frame, digits: int) -> Assembly:
     with tempfile.TemporaryDirectory() as folder:
         path = Path(folder) / "blocks.obj"
         path.write_text("\n".join(lines) + "\n")
-        return Assembly.load(path, frame=frame)
+        return interlock.read(path, frame=frame)
 
 
 def _noisy(meshes, frame, amplitude: float, rng: np.random.Generator) -> Assembly:

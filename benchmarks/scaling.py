@@ -18,7 +18,7 @@ Each size runs the whole pipeline several times and times every stage on its
 own: ``generation`` (``random_hexagon`` + ``rhomblock_assembly``, or
 ``escher_block`` + ``patch``), ``contacts``, ``matrix``, ``rank`` and ``lp``
 (the stress LP, Clarabel in feasibility form) — these four from
-``check(assembly, validate=False).timings`` — and ``export`` (binary STL);
+``check(assembly, validate=False).timings`` — and ``export`` (binary STL, :func:`interlock.write`);
 ``verdict`` is contacts through lp.  The BLAS runs on one thread
 (:data:`benchmarks.common.BLAS_THREADS`), for ours and the baseline alike.
 Every run generates a new assembly, so nothing is cached between runs.  Up to
@@ -50,7 +50,7 @@ log(MB) over the sizes above :data:`MEMORY_FIT_FLOOR` MB for memory).
 The **float32 family** (:func:`run_float32`, ``scaling_float32.json`` and
 ``.png``; issue 35): the same assemblies, ring fixed and block 0 fixed, turned
 by a random rotation (seed: the size), written as binary STL (float32) and
-read back with ``Assembly.load``.  Each size runs ``check(validate=False)`` on
+read back with ``interlock.read``.  Each size runs ``check(validate=False)`` on
 the turned float64 assembly and on the float32 file alternately, in the same
 process; ``seconds`` are medians of the verdict (contacts through lp, and the
 margin, which only the float32 file needs).  Targets: every float32 verdict
@@ -114,7 +114,7 @@ from benchmarks.common import (BLAS_THREADS, limited_blas, load_average, naive_v
                                write_json)
 from interlock import wallpaper
 from interlock.blocks import Assembly, escher_block, patch, random_hexagon, rhomblock_assembly
-from interlock.gallery import export
+from interlock.formats import read, write
 from interlock.verify import check
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -298,8 +298,8 @@ def _float32_row(family: Family, size, folder: Path, budget: float) -> dict:
     """One size: the float64 and the float32 verdicts, alternately, up to :data:`FLOAT32_RUNS` pairs."""
     made = turned(family.generate(size), seed=int(round(10 * size)))
     path = folder / "float32.stl"
-    export(made, path)
-    stored = Assembly.load(path)
+    write(made, path)
+    stored = read(path)
     runs, spent = [], 0.0
     while len(runs) < FLOAT32_RUNS:
         begin = time.perf_counter()
@@ -409,8 +409,7 @@ def bunny_peers(copies: int) -> tuple:
 
     if not _BUNNY:
         folder = REFERENCE_DATA / "topolite" / "bunny"
-        _BUNNY.extend(Assembly.load([folder / f"part_{k}.obj" for k in range(1, BUNNY_PARTS + 1)],
-                                    frame=()).world_meshes())
+        _BUNNY.extend(read([folder / f"part_{k}.obj" for k in range(1, BUNNY_PARTS + 1)], frame=()).world_meshes())
     meshes = [trimesh.Trimesh(m.vertices.copy(), m.faces.copy(), process=False) for m in _BUNNY]
     low = np.min([m.bounds[0] for m in meshes], axis=0)
     high = np.max([m.bounds[1] for m in meshes], axis=0)
@@ -688,7 +687,7 @@ def _pipeline(family: Family, size, folder: Path):
     verdict = check(assembly, validate=False)
     seconds.update({stage: verdict.timings[stage] for stage in VERDICT})
     start = time.perf_counter()
-    export(assembly, folder / "scaling.stl")
+    write(assembly, folder / "scaling.stl")
     seconds["export"] = time.perf_counter() - start
     seconds["verdict"] = sum(seconds[stage] for stage in VERDICT)
     return seconds, assembly, verdict
@@ -827,7 +826,7 @@ def memory_child(family: str, size) -> dict | None:
         assembly = generate(size)
         check(assembly, validate=False, progress=meter.enter)
         meter.enter("export")
-        export(assembly, Path(folder) / "scaling.stl")
+        write(assembly, Path(folder) / "scaling.stl")
         meter.enter(None)
     return meter.result()
 

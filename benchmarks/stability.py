@@ -35,7 +35,7 @@ stopped after :data:`ARMADILLO_CRA_LIMIT` seconds.  ``cra_scaling`` records CRA'
 time per upright solve against the block count (wedges, H, A, shelves, cubes,
 bridge, arch, armadillo), ours and upstream, for the chart's second panel.
 
-``exported``: our arch and a re-exported sample written by ``export(...,
+``exported``: our arch and a re-exported sample written by ``interlock.write(...,
 "x.json")`` (COMPAS assembly JSON), solved by compas_cra from that file alone
 and by us from the same file read back (issue 23).
 """
@@ -55,8 +55,8 @@ import trimesh
 
 from benchmarks.common import (BLAS_THREADS, REFERENCE_DATA, limited_blas, main, pyplot, results_folder, save_chart,
                                write_json)
-from interlock.blocks import load_compas
-from interlock.blocks.compas import UPSTREAM_SUPPORTS
+import interlock
+from interlock.formats.compas import UPSTREAM_SUPPORTS
 from interlock.verify import check, contacts
 from interlock.verify.statics import TILT_AXES, rbe, tilted_gravity
 from interlock.verify.statics.interfaces import interfaces
@@ -209,7 +209,7 @@ def run(quick: bool = False) -> dict:
 # --- one case ---------------------------------------------------------------------------
 
 def _load(case: Case):
-    assembly = load_compas(DATA / f"{case.stem}.json")
+    assembly = interlock.read(DATA / f"{case.stem}.json")
     density = np.array([case.density.get(label, 1.0) for label in assembly.labels])
     return assembly, (float(density[0]) if np.all(density == density[0]) else density)
 
@@ -469,7 +469,7 @@ def _armadillo(repeats, upstream, ours_cra, quick, table, notes, scaling) -> lis
     contacts and upstream's gap; upstream's rbe_solve and cra_solve (stopped after ARMADILLO_CRA_LIMIT)."""
     if quick:
         return []
-    assembly = load_compas(DATA / "armadillo.json")
+    assembly = interlock.read(DATA / "armadillo.json")
     rows = {}
 
     def ours(find):
@@ -678,29 +678,28 @@ def _upstream_solve(upstream, method, assembly, case, mu=None):
 
 
 def exported_side_by_side(upstream, quick: bool) -> list[dict]:
-    """Our assemblies written as COMPAS JSON by ``export(..., "x.json")``, solved by compas_cra and by us.
+    """Our assemblies written as COMPAS JSON by ``interlock.write(..., "x.json")``, solved by compas_cra and by us.
 
     The file is what a compas_cra user receives: upstream reads it with
     ``compas.json_load`` (no other preparation than its own interface search,
     :data:`EXPORTED_INTERFACES`), takes the frame from ``is_support``, and runs
     ``rbe_solve`` and ``cra_solve``; ours runs ``rbe`` and ``cra`` on the same
-    file read back by ``Assembly.load``.
+    file read back by ``interlock.read``.
     """
     import tempfile
     from pathlib import Path
 
-    from interlock.blocks import Assembly, semicircular_arch
-    from interlock.gallery import export
+    from interlock.blocks import semicircular_arch
 
     mu = math.tan(math.radians(43.0))
     subjects = [("36-voussoir arch (2 supports)", semicircular_arch())]
     if not quick:
-        subjects.append(("compas_cra shelf-stable, re-exported", load_compas(DATA / "shelf-stable.json")))
+        subjects.append(("compas_cra shelf-stable, re-exported", interlock.read(DATA / "shelf-stable.json")))
     out = []
     with tempfile.TemporaryDirectory() as folder:
         for name, assembly in subjects:
-            path = export(assembly, Path(folder) / "exported.json")
-            back = Assembly.load(path)
+            path = interlock.write(assembly, Path(folder) / "exported.json")
+            back = interlock.read(path)
             row = {"case": name, "blocks": len(back), "frame": list(back.frame), "mu": mu,
                    "ours_rbe": bool(rbe(back, mu).stable)}
             ours_cra, _ = _ours_cra()

@@ -22,7 +22,7 @@ import time
 
 from benchmarks.common import (BLAS_THREADS, NAIVE_STAGES, REFERENCE_DATA, limited_blas, main, naive_verdict, pyplot,
                                save_chart, write_json)
-from interlock.blocks import Assembly
+from interlock.formats import read
 from interlock.verify import check
 
 BUNNY = REFERENCE_DATA / "topolite" / "bunny"
@@ -37,7 +37,7 @@ def run(quick: bool = False) -> dict:
         print(f"skipping the bunny: {BUNNY} is absent")
         return {}
     repeats = 1 if quick else 7
-    bunny = Assembly.load([BUNNY / f"part_{k}.obj" for k in range(1, BUNNY_PARTS + 1)], frame=FRAME)
+    bunny = read([BUNNY / f"part_{k}.obj" for k in range(1, BUNNY_PARTS + 1)], frame=FRAME)
     verdicts = {}
 
     def ours(validate: bool):
