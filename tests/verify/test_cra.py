@@ -10,7 +10,8 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
-from interlock.blocks import Assembly, load_compas
+import interlock
+from interlock.blocks import Assembly
 from interlock.errors import InterlockError
 from interlock.verify import contacts
 from interlock.verify.statics import cra
@@ -22,7 +23,7 @@ TOL = 0.1  # critical_tilt's bisection tolerance, degrees
 
 
 def _model(reference_data, name):
-    assembly = load_compas(reference_data / "compas_cra" / f"{name}.json")
+    assembly = interlock.read(reference_data / "compas_cra" / f"{name}.json")
     return assembly, contacts(assembly)
 
 
