@@ -201,7 +201,7 @@ def contacts(assembly: Assembly, rtol: float | None = None, angle_tol: float = D
     """
     if not isinstance(assembly, Assembly):
         raise ContactError(f"contacts() needs an interlock Assembly, got {type(assembly).__name__}; "
-                           "build one with Assembly.from_meshes or Assembly.load")
+                           "build one with Assembly.from_meshes or interlock.read")
     rtol = None if rtol is None else check_tolerance("rtol", rtol)
     angle_tol = check_tolerance("angle_tol", angle_tol)
     area_rtol = check_tolerance("area_rtol", area_rtol)

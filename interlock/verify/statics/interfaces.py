@@ -320,7 +320,7 @@ def compas_interfaces(path, assembly: Assembly) -> tuple[Contact, ...]:
     path : str or Path
         A COMPAS assembly JSON file (``compas_assembly...Assembly`` or ``compas_cra...CRA_Assembly``).
     assembly : Assembly
-        The same file's blocks, e.g. ``load_compas(path)``.
+        The same file's blocks, e.g. ``interlock.read(path)``.
 
     Returns
     -------
