@@ -1,6 +1,7 @@
 """The command line: help, version, groups, and one-line errors without tracebacks."""
 
 import json
+import re
 import subprocess
 import sys
 
@@ -344,3 +345,22 @@ def test_a_huge_fixed_range_is_refused_before_it_is_spelled_out(reference_data):
                          capture_output=True, text=True, timeout=120)
     assert run.returncode == 2 and "Traceback" not in run.stderr
     assert "reaches beyond block 10,000,000" in run.stderr.strip().splitlines()[-1]
+
+
+def test_verify_and_stability_write_the_3d_view_with_html(tmp_path, capsys):
+    """``--html FILE`` on verify and stability writes the same offline view as ``interlock view``; stdout stays the
+    verdict, and a name that is not .html is refused in one line."""
+    grid = [(x, y) for x in range(3) for y in range(3)]
+    paths = _cube_files(tmp_path, grid)
+    view = tmp_path / "grid.html"
+    assert main(["verify", *paths, "--fixed", "0-3,5-8", "--html", str(view)]) == 1
+    captured = capsys.readouterr()
+    assert captured.out.startswith("not infinitesimally interlocked") and str(view) in captured.err
+    page = view.read_text()
+    assert page.lstrip().lower().startswith("<!doctype html") and "block 4 can start to move straight up" in page
+    assert not re.search(r"<(script|link|img)[^>]+(src|href)=[\"']?https?://", page)  # nothing fetched
+    stack = tmp_path / "stack.html"
+    assert main(["stability", *paths[:1], "--mu", "0.5", "--fixed", "0", "--html", str(stack)]) == 0
+    assert stack.read_text().lstrip().lower().startswith("<!doctype html")
+    assert main(["verify", *paths, "--html", str(tmp_path / "grid.txt")]) == 2
+    assert "give a name ending in .html" in capsys.readouterr().err
