@@ -209,6 +209,7 @@ def test_density_per_block():
     ({"mu": 0.5, "gravity": (0, -1)}, "3-vector"), ({"mu": 0.5, "density": 0.0}, "density"),
     ({"mu": 0.5, "density": [1.0]}, "one per block"), ({"mu": 0.5, "cone": "round"}, "cone must be"),
     ({"mu": 0.5, "sides": 3}, "sides"), ({"mu": 0.5, "frame": [5]}, "out of range"),
+    ({"mu": 0.5, "density": 1e308}, "at most 1e\\+30"), ({"mu": 0.5, "density": [1.0, 1e300]}, "at most 1e\\+30"),
 ])
 def test_bad_input_raises(kwargs, message):
     with pytest.raises(InterlockError, match=message):

@@ -520,14 +520,26 @@ def force_units(unit: str | None) -> dict[str, str | None]:
             "density_unit": f"weight per cubic {unit} (with a density in {example}/{unit}^3, forces are in {example})"}
 
 
+#: Densities above this are refused: the weights (density x volume, squared in the solvers' scaling) would overflow
+#: and an overflow must never read as physics (a density of 1e308 answered "stable" where 1 answers "unstable").
+MAX_DENSITY = 1e30
+
+
 def block_densities(density, count: int) -> np.ndarray:
+    """``density`` as one positive finite value per block, at most :data:`MAX_DENSITY`; StabilityError otherwise."""
     if np.ndim(density) == 0:
-        return np.full(count, positive("density", density))
+        value = positive("density", density)
+        if value > MAX_DENSITY:
+            raise StabilityError(f"density must be at most {MAX_DENSITY:g} (choose the unit of mass so that it is), "
+                                 f"got {value:g}")
+        return np.full(count, value)
     try:
         values = np.asarray(density, dtype=float)
     except (TypeError, ValueError):
         raise StabilityError(f"density must be a number or one number per block, got {density!r}") from None
-    if values.shape != (count,) or not np.all(np.isfinite(values)) or not np.all(values > 0):
-        raise StabilityError(f"density must be > 0 and finite, one value or {count} (one per block); "
-                             f"got shape {values.shape}")
+    if values.shape != (count,) or not np.all(np.isfinite(values)) or not np.all(values > 0) \
+            or not np.all(values <= MAX_DENSITY):
+        raise StabilityError(f"density must be > 0 and at most {MAX_DENSITY:g}, one value or {count} (one per "
+                             f"block); got shape {values.shape}, from {values.min(initial=np.inf):g} to "
+                             f"{values.max(initial=-np.inf):g}")
     return values
