@@ -6,6 +6,7 @@ import trimesh
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+import interlock
 from interlock import InterlockError, wallpaper
 from interlock.blocks import Assembly, AssemblyError, escher_block, patch, periodic_cell
 from interlock.blocks.repair import unmatched_edges
@@ -61,11 +62,12 @@ def test_one_obj_file_with_objects_gives_blocks_in_file_order(tmp_path):
     np.testing.assert_allclose(a.centroids[:, 0], [0.5, 1.5, 2.5])
 
 
-def test_touching_bodies_in_one_stl_are_refused(tmp_path):
+def test_touching_bodies_in_one_stl_are_split_into_their_closed_bodies(tmp_path):
+    # issue 38: the half-edges around each shared edge pair up by orientation and side (blocks.bodies)
     path = tmp_path / "row.stl"
     trimesh.util.concatenate(_row_of_cubes(2)).export(path)
-    with pytest.raises(AssemblyError, match="several bodies that touch"):
-        Assembly.load(path)
+    row = interlock.read(path)
+    assert len(row) == 2 and np.allclose(row.volumes, 1.0) and all(m.is_watertight for m in row.world_meshes())
 
 
 def test_load_errors(tmp_path):

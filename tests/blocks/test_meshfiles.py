@@ -70,23 +70,23 @@ def test_the_bunny_as_one_obj_without_objects(tmp_path, reference_data):
     np.testing.assert_allclose(one.centroids, apart.centroids, atol=1e-12)
 
 
-def test_touching_bodies_in_one_plain_stl_or_ply_are_still_refused(tmp_path):
+def test_touching_bodies_in_one_plain_stl_or_ply_are_split_into_their_bodies(tmp_path):
     cubes = trimesh.util.concatenate([trimesh.creation.box(bounds=[[x, 0, 0], [x + 1, 1, 1]]) for x in range(2)])
     for suffix in (".stl", ".ply"):
         path = tmp_path / f"row{suffix}"
         cubes.export(path)
-        with pytest.raises(AssemblyError, match="several bodies that touch, which a single"):
-            read(path)
+        row = read(path)
+        assert len(row) == 2 and sorted(row.centroids[:, 0].round(9)) == [0.5, 1.5]
 
 
-def test_an_obj_soup_of_touching_cubes_in_one_run_is_refused(tmp_path):
-    # every face with its own vertices and all vertices first: nothing tells the cubes apart
+def test_an_obj_soup_of_touching_cubes_in_one_run_is_split_into_the_cubes(tmp_path):
+    # every face with its own vertices and all vertices first: only the closed surfaces tell the cubes apart
     text = _grid_obj(shared_corners=False).splitlines()
     path = tmp_path / "soup.obj"
     path.write_text("\n".join([line for line in text if line.startswith("v ")]
                               + [line for line in text if line.startswith("f ")]) + "\n")
-    with pytest.raises(AssemblyError, match="several bodies that touch"):
-        read(path)
+    soup = read(path)
+    assert len(soup) == 9 and np.allclose(soup.volumes, 1.0)
 
 
 def test_obj_objects_named_fixed_are_the_frame(tmp_path):
