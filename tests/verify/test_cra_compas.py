@@ -68,7 +68,7 @@ def test_cube_stack_motion_is_certified_by_our_exact_lp():
     # ... so the vertices it (nearly) closes are closed exactly, with the least change, before the exact LP
     snapped = _snap(problem, q, dd[:, 0] + 1.0 <= 0.01)
     assert np.abs(snapped - q).max() < 0.01
-    assert problem._exact(b_eq, snapped) is not None
+    assert problem.exact(b_eq, snapped) is not None
 
 
 def test_tilted_cube_stack_motion_turns_back():
@@ -78,7 +78,7 @@ def test_tilted_cube_stack_motion_turns_back():
     assert motion[0, 1] < 0 and motion[0, 2] < 0 and abs(motion[0, 0]) < 1e-9
     problem, b_eq, q, dd = _in_eps_units(stack, 0.5, gravity, motion)
     assert np.all(dd[:, 0] + 1.0 <= 1e-3)
-    assert problem._exact(b_eq, _snap(problem, q, dd[:, 0] + 1.0 <= 1e-3)) is not None
+    assert problem.exact(b_eq, _snap(problem, q, dd[:, 0] + 1.0 <= 1e-3)) is not None
     assert upstream_motion(stack, mu=0.5, gravity=tilted_gravity("x", 30)) is None  # tan 30 > 0.5: it slides
     assert upstream_motion(stack, mu=0.5, gravity=(0, 0, 1)) is None  # nothing holds it up
 
@@ -119,10 +119,10 @@ def test_arch_motion_not_certified(angle):
     problem, b_eq, q, dd = _in_eps_units(arch, ARCH_MU, gravity, motion)
     assert dd[:, 0].min() >= -1.0 - 1e-3 and np.abs(dd).max() <= problem.ratio * (1 + 1e-3)
     closed = dd[:, 0] + 1.0 <= 0.01
-    # (_exact needs a closed vertex: with none, its LP has no unknowns and scipy refuses it)
-    accepted = [bool((dd[:, 0] + 1.0 <= 1e-7).any()) and problem._exact(b_eq, q) is not None]
+    # (exact needs a closed vertex: with none, its LP has no unknowns and scipy refuses it)
+    accepted = [bool((dd[:, 0] + 1.0 <= 1e-7).any()) and problem.exact(b_eq, q) is not None]
     snapped = _snap(problem, q, closed)
-    accepted.append(snapped is not None and bool(closed.any()) and problem._exact(b_eq, snapped) is not None)
+    accepted.append(snapped is not None and bool(closed.any()) and problem.exact(b_eq, snapped) is not None)
     if any(accepted):
         pytest.fail(f"our exact LP now accepts upstream's arch motion at {angle} deg (raw, snapped): {accepted}")
 
