@@ -465,8 +465,8 @@ def assess(matrix, contacts, scale: float, stress, tolerance, source: str, *, pe
         open_ = np.flatnonzero(~(proved < 1.0))
         if len(open_) <= ONE_STRESS_COLUMNS:
             proved[open_] = np.minimum(proved[open_], one_stress_bounds(A, eps, stress, open_, budget=budget))
-            largest = float(proved.max(initial=0.0))
-            lower = max(lower, math.inf if largest <= 0 else 1.0 / largest)
+            worst = float(proved.max(initial=0.0))
+            lower = max(lower, math.inf if worst <= 0 else 1.0 / worst)
     if lower > 1.0:
         return Margin(lower, math.inf, largest, source, per_contact=bool(per_contact))
     motion, upper, status = None, math.inf, "no motion within the tolerance found"

@@ -66,6 +66,9 @@ def test_float32_bunny_with_its_frame_is_interlocked_or_says_its_margin(bunny_fl
     assert "margin at least" in verdict.status
     if verdict.interlocked:
         assert verdict.margin.lower > 1
+    # the tolerance stated is the largest contact's, whichever bound proved the margin (a float32 rounding:
+    # 2^-24 of the coordinates, times the precision factor and the faces' bends, far below a part's size)
+    assert verdict.margin.tolerance == verdict.tolerances["tolerance"] < 1e-4 * assembly.block_size
 
 
 def test_certify_does_not_certify_what_the_margin_does_not_support(bunny_float32):
