@@ -3,35 +3,13 @@
 from __future__ import annotations
 
 import numpy as np
-import trimesh
 
 from interlock.blocks.assembly import Assembly
 from interlock.blocks.classes import block_classes
-from interlock.blocks.escher import Block
 from interlock.errors import GalleryError
+from interlock.formats.common import PALETTE, as_assembly  # the files' palette and block/mesh/assembly rule
 
 __all__ = ["as_assembly", "block_classes", "block_colours", "exploded", "exploded_factor", "PALETTE"]
-
-#: RGBA colours (uint8) for block classes 0, 1, 2, ... (cycled): colour-blind-safe (Okabe-Ito), opaque.
-PALETTE = np.array([[0, 114, 178, 255], [230, 159, 0, 255], [0, 158, 115, 255], [204, 121, 167, 255],
-                    [86, 180, 233, 255], [213, 94, 0, 255], [240, 228, 66, 255], [120, 120, 120, 255]],
-                   dtype=np.uint8)
-
-
-def as_assembly(obj) -> Assembly:
-    """A block, a mesh or an assembly as an :class:`~interlock.blocks.Assembly`.
-
-    >>> from interlock.blocks import presets
-    >>> len(as_assembly(presets.cube_grid().mesh(0)))
-    1
-    """
-    if isinstance(obj, Assembly):
-        return obj
-    if isinstance(obj, Block):
-        return Assembly.from_meshes([obj.mesh], info={"group": obj.group.name})
-    if isinstance(obj, trimesh.Trimesh):
-        return Assembly.from_meshes([obj])
-    raise GalleryError(f"expected a Block, an Assembly or a trimesh.Trimesh, got {type(obj).__name__}")
 
 
 def block_colours(assembly: Assembly) -> np.ndarray:
