@@ -52,7 +52,8 @@ the exact LPs (n = 8); the first proof, which decides, is 2 to 25 times
 weaker.  Where no policy passes within :data:`LOAD_PATH_PASSES` passes
 nothing is proved: on p4 Escher patches of radius 9 and 12 the values
 double with each pass (measured; carrying each vertex row's load apart
-seems to lose too much there).
+seems to lose too much there), so the passes stop once the values have
+grown like that twice in a row (:data:`LOAD_PATH_DIVERGENCE`).
 
 Floating point: the 6 x 6 systems are solved in floats; each value is
 inflated by :data:`LOAD_PATH_SAFETY` and negative rounding residues of the
@@ -77,7 +78,7 @@ from interlock.errors import InterlockError
 __all__ = ["LoadPathBound", "LoadPathError", "load_path_bound", "LOAD_PATH_PASSES", "LOAD_PATH_PIVOTS",
            "LOAD_PATH_UNIT_PIVOTS", "LOAD_PATH_SAFETY", "LOAD_PATH_PERTURBATION", "LOAD_PATH_SLACK", "LOAD_PATH_EVALUATION_STEPS",
            "LOAD_PATH_BATCH", "LOAD_PATH_IMPROVEMENTS", "LOAD_PATH_FIRST_TRY", "LOAD_PATH_STALL",
-           "LOAD_PATH_RADII", "LOAD_PATH_REGIONAL"]
+           "LOAD_PATH_RADII", "LOAD_PATH_REGIONAL", "LOAD_PATH_DIVERGENCE", "LOAD_PATH_DIVERGING"]
 
 #: Gauss-Seidel passes at most before a policy must have proved (outside in, inside out, ...).  RhomBlock
 #: hexagons rounded to float32 prove after 2 passes up to n = 10, after 4 at n = 12.
@@ -99,6 +100,13 @@ LOAD_PATH_SLACK = 0.05
 LOAD_PATH_EVALUATION_STEPS = 1500
 #: Blocks whose local LPs are solved in one batch by the Jacobi passes (memory: about 100 kB per block).
 LOAD_PATH_BATCH = 500
+#: The passes stop early, proving nothing, once the median incidence value has grown by at least this factor in
+#: each of the last :data:`LOAD_PATH_DIVERGING` passes (counted from the pass after the first try): on p4 Escher
+#: patches of radius 9 rounded to float32 it doubles with every pass from the third on and no policy ever
+#: proves; where a policy proves (RhomBlock hexagons, p4 radius up to 6) the median falls or grows by at most
+#: 1.4x before it does.  It only saves time: the one-stress bound of :mod:`~interlock.verify.margin` follows.
+LOAD_PATH_DIVERGENCE = 1.5
+LOAD_PATH_DIVERGING = 2
 #: Policy-iteration steps at most (each: a pass of the unit loads, then of the incidences, and an evaluation).
 LOAD_PATH_IMPROVEMENTS = 8
 #: The first pass after which the local solutions are evaluated (tried as certificates); earlier ones rarely are.
@@ -202,7 +210,7 @@ def load_path_bound(A, eps, block_size: int = 6, *, start: float | None = None, 
     paths = _Paths(A, eps, block_size)
     paths.gamma[:] = start
     total, best, done, policy = 0, None, 0, None
-    proper = False
+    proper, medians = False, []
     while done < passes:  # from below, until the local solutions form certificates (a proper policy)
         done += 1
         policy, count = paths.sweep(paths.layers if done % 2 else paths.layers[::-1], pivots)
@@ -211,7 +219,7 @@ def load_path_bound(A, eps, block_size: int = 6, *, start: float | None = None, 
             budget.check(stage)
         if done >= LOAD_PATH_FIRST_TRY:
             proper = paths.evaluate(policy)  # if not, the values are pushed up along the policy
-            if proper:
+            if proper or _diverging(medians, paths.gamma):
                 break
     proved = paths.gamma.copy() if proper else None
     for _ in range(LOAD_PATH_IMPROVEMENTS if proper else 0):  # policy iteration: improve, evaluate again
@@ -236,6 +244,16 @@ def load_path_bound(A, eps, block_size: int = 6, *, start: float | None = None, 
     if best is None:
         return LoadPathBound(math.inf, np.full((blocks * block_size, 2), np.inf), done, total)
     return LoadPathBound(best.bound, best.coordinates, best.passes, total)
+
+
+def _diverging(medians: list, gamma: np.ndarray) -> bool:
+    """Record the median of ``gamma``; True once it grew by :data:`LOAD_PATH_DIVERGENCE` in each of the last
+    :data:`LOAD_PATH_DIVERGING` passes (the first recorded value is the pass after the first try)."""
+    finite = gamma[np.isfinite(gamma)]
+    medians.append(float(np.median(finite)) if len(finite) else math.inf)
+    recent = medians[1:][-(LOAD_PATH_DIVERGING + 1):]
+    return len(recent) > LOAD_PATH_DIVERGING and all(
+        later >= LOAD_PATH_DIVERGENCE * earlier for earlier, later in zip(recent, recent[1:]))
 
 
 def _regional(A, eps, paths, proved, best: LoadPathBound, target: float, budget=None,

@@ -218,6 +218,42 @@ def test_load_path_bound_is_close_to_exact_on_a_chain():
     assert found.bound == pytest.approx(_exact_reach(A.toarray(), eps), rel=1e-5)
 
 
+@settings(max_examples=20, deadline=None, derandomize=True)
+@given(seed=st.integers(0, 2**16), n=st.integers(1, 8), extra=st.integers(1, 10))
+def test_one_stress_bounds_never_undercut_the_coordinate_lps(seed, n, extra):
+    """``B_j >= max |x_j|`` on ``{A x >= -eps}`` for a matrix with a positive self-stress (``w^T A = 0``)."""
+    import scipy.optimize
+    import scipy.sparse as sp
+
+    from interlock.verify.margin import one_stress_bounds
+
+    rng = np.random.default_rng(seed)
+    dense = rng.normal(size=(n + extra, n))
+    w = rng.uniform(0.1, 2.0, n + extra)
+    dense -= np.outer(w, w @ dense) / (w @ w)  # now w^T A = 0: every motion opens some row and closes another
+    if np.linalg.matrix_rank(dense) < n:
+        return
+    eps = rng.uniform(0.5, 2.0, n + extra) * 1e-3
+    bounds = one_stress_bounds(sp.csr_matrix(dense), eps, w, chunk=3)
+    for j in range(n):
+        for sign in (1.0, -1.0):
+            objective = np.zeros(n)
+            objective[j] = -sign
+            result = scipy.optimize.linprog(objective, A_ub=-dense, b_ub=eps, bounds=(None, None), method="highs")
+            assert result.status == 0
+            assert bounds[j] >= -result.fun * (1 - 1e-9) - 1e-12
+
+
+def test_load_paths_stop_once_their_values_keep_doubling():
+    """The passes give up (nothing proved, the one-stress bound follows) when the median value grows 1.5x twice."""
+    from interlock.verify.load_paths import _diverging
+
+    medians, growing = [], [1e-5, 1e-3, 2.1e-3, 4.4e-3, 9e-3]
+    assert [_diverging(medians, np.full(4, value)) for value in growing] == [False, False, False, True, True]
+    medians, settling = [], [1e-5, 5e-4, 4e-4, 5.4e-4, 5.5e-4, 7.6e-4]
+    assert not any(_diverging(medians, np.array([value, np.inf])) for value in settling)
+
+
 @pytest.fixture(scope="module")
 def small_hexagon(tmp_path_factory):
     """A RhomBlock 6 x 6 x 6 hexagon (108 blocks, ring fixed), turned, written as binary STL and read back."""
