@@ -61,8 +61,9 @@ crashed is the *declined share*.  Where the margin's lower bound is loose
 (the bunny's is 0), the band is also given with the margin's upper bound
 (``declined_in_upper_band``; not proved, a motion attains it).
 ``within_tolerance_in_band`` is the part of the band answered "not
-interlocked within tolerance": right where the original is not interlocked,
-but counted as declined, as issue 35 counts it.  Targets (issue 35): 0 wrong, at most 10 % declined in the band, 0
+interlocked within tolerance" (a motion within tolerance that no finite motion
+showed: "not interlocked (finite motion shown)" is decided): right where the
+original is not interlocked, but counted as declined, as issue 35 counts it.  Targets (issue 35): 0 wrong, at most 10 % declined in the band, 0
 refused for re-triangulation.
 
 Reading the chart: one bar per family, stacked by class (green right, red
@@ -349,7 +350,8 @@ def _decide(assembly: Assembly, frame) -> dict:
                 "seconds": time.perf_counter() - start}
     tolerance = v.tolerances.get("tolerance", None if v.margin is None else v.margin.tolerance)
     return {"verdict": v.interlocked, "status": str(v), "seconds": time.perf_counter() - start,
-            "within_tolerance": v.motion_kind == "within tolerance",
+            "within_tolerance": v.motion_kind == "within tolerance" and not (v.finite_motion is not None
+                                                                             and v.finite_motion.shown),
             "tolerance": tolerance, "tolerance_from": v.tolerances.get("tolerance_from"),
             "margin": None if v.margin is None else [v.margin.lower, v.margin.upper],
             "moving": len(v.moving), "contacts": v.contacts}

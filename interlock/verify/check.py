@@ -10,6 +10,8 @@ from dataclasses import dataclass, field
 from numbers import Real
 
 import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.csgraph import connected_components
 from threadpoolctl import threadpool_limits
 
 from interlock.blocks.assembly import Assembly
@@ -21,28 +23,34 @@ from interlock.verify.budget import Budget, TimeLimitReached
 from interlock.verify.first_order import (DENSE_COLUMNS, FARKAS_CLOSED_RTOLS, FIRST_KERNEL_PROBE, GRAM_RESOLUTION,
                                          GRAM_SURE_RTOL, INVERSE_ITERATIONS, LP_TOL, MAX_KERNEL_PROBE,
                                          PROJECTION_ROUNDS, RANK_CLEAR_RTOL, SOLVER_THREADS, matrix_rank,
-                                         interior_motion, opening_motion, positive_stress)
+                                         interior_motion, opening_motion, positive_stress, rigid_cluster_motion)
 from interlock.verify.contacts import (CONTACT_MODELS, PRESS_RTOL, Contact, contacts as find_contacts, model_contacts,
                                       search_distances)
 from interlock.verify.load_paths import load_path_bound
 from interlock.verify.margin import Margin, assess, row_tolerances
 from interlock.verify.precision import PRECISION_FACTOR, Precision, block_precision
 from interlock.verify.matrix import InterlockingMatrix, interlocking_matrix
-from interlock.verify.tolerances import (COARSE_RATIO, NOISE_CONTACTS, NOISE_SPREAD, block_noise, coarsest,
-                                        contact_tolerances, tolerance_source, too_coarse)
+from interlock.verify.tolerances import (COARSE_RATIO, NOISE_CONTACTS, NOISE_SPREAD, block_depths, block_noise,
+                                        coarsest, contact_tolerances, tolerance_source, too_coarse)
 from interlock.verify.validate import refuse_overlaps_without_contact, validate as check_overlaps
 
 __all__ = ["Verdict", "check", "beyond_first_order", "block_noise", "opening_motion", "contact_tolerances",
            "FARKAS_CLOSED_RTOLS", "PROJECTION_ROUNDS", "STAGES", "RANK_RTOL", "RANK_CLEAR_RTOL", "GRAM_RESOLUTION",
            "GRAM_SURE_RTOL", "LP_TOL", "LP_SOLVERS", "MOVING_RTOL", "DENSE_COLUMNS", "FIRST_KERNEL_PROBE",
            "COARSE_RATIO", "NOISE_CONTACTS", "NOISE_SPREAD", "SOLVER_THREADS", "MAX_KERNEL_PROBE",
-           "INVERSE_ITERATIONS"]
+           "INVERSE_ITERATIONS", "DEPTH_RTOL", "ESCAPE_BLOCKS"]
 
 #: A singular value at most ``RANK_RTOL * sigma_max`` is zero ...
 RANK_RTOL = 1e-9
 #: Solvers for the stress LP. Clarabel (direct sparse LDL^T, feasibility form) took 24 s on the stress LP of a
 #: 4,800-block RhomBlock hexagon where HiGHS' interior-point method took 206 s; HiGHS is the fallback.
 LP_SOLVERS = ("clarabel", "highs")
+#: A motion within tolerance that collides is followed again with interference up to each block's precision
+#: (:func:`~interlock.verify.tolerances.block_depths`) only where that reaches this share of a block: float64
+#: input reads ~1e-16, float32 ~1e-7, and below this the volume test has already decided.
+DEPTH_RTOL = 1e-9
+#: ... and then with the single moving blocks that open the most, each moved alone as a rigid body: at most this many.
+ESCAPE_BLOCKS = 4
 #: The stages of :func:`check`, in order, as reported to its ``progress`` callback and in ``timings``.
 STAGES = ("validate", "contacts", "matrix", "rank", "lp", "margin", "motion", "certify", "beyond")
 
@@ -389,7 +397,9 @@ def _decide(assembly, frame, translational, certify, rank_rtol, lp_tol, contacts
     if verdict.motion is not None and verdict.motion_kind == "within tolerance":
         # a motion the tolerances leave open: moved for real, it either shows the blocks coming apart or collides
         with _stage(timings, "motion", progress, budget):
-            verdict = _shown_finitely(assembly, verdict, budget)
+            escapes = _rigid_escapes(A, found, limits, verdict, len(assembly), budget)
+            verdict = _shown_finitely(assembly, verdict, block_depths(found, precision, len(assembly), tolerance),
+                                      escapes, budget)
     if certify:
         from interlock.verify.certify import certify_verdict
 
@@ -427,19 +437,57 @@ def _within_tolerance(A: InterlockingMatrix, found, limits, x, blocks: int, base
                    motion=motion, motion_kind="within tolerance", moving=moving, **base)
 
 
-def _shown_finitely(assembly: Assembly, verdict: Verdict, budget: Budget | None = None) -> Verdict:
+def _rigid_escapes(A: InterlockingMatrix, found, limits, verdict: Verdict, blocks: int,
+                   budget: Budget | None = None) -> list:
+    """Per-block twists (one array each) that move pieces of the verdict's moving blocks as rigid bodies within the
+    tolerances (:func:`~interlock.verify.first_order.rigid_cluster_motion`): first every cluster the moving blocks'
+    contacts join, then single blocks, the most opening first (at most :data:`ESCAPE_BLOCKS`)."""
+    moving = np.asarray(verdict.moving, dtype=int)
+    if len(moving) == 0 or A.translational:
+        return []
+    inside = np.zeros(blocks, dtype=bool)
+    inside[moving] = True
+    pairs = np.array([(c.i, c.j) for c in found if inside[c.i] and inside[c.j]], dtype=int).reshape(-1, 2)
+    graph = sp.coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(blocks, blocks))
+    _, label = connected_components(graph, directed=False)
+    clusters = [moving[label[moving] == k] for k in np.unique(label[moving])]
+    eps = row_tolerances(A, found, np.maximum(limits, np.finfo(float).tiny))
+    escapes = [rigid_cluster_motion(A, clusters, eps, budget)]
+    if len(moving) > 1:  # a part that slides out alone, where the LP's point moved its neighbours along
+        alone = [(rigid_cluster_motion(A, [[b]], eps, budget), b) for b in moving]
+        opened = sorted(((float(np.maximum(A.matrix @ x, 0.0).sum()), int(b), x) for x, b in alone if x is not None),
+                        key=lambda item: (-item[0], item[1]))
+        escapes += [x for _, _, x in opened[:ESCAPE_BLOCKS]]
+    return [_motion(A, x, blocks, reversible=False)[0] for x in escapes if x is not None]
+
+
+def _shown_finitely(assembly: Assembly, verdict: Verdict, depths: np.ndarray, escapes=(),
+                    budget: Budget | None = None) -> Verdict:
     """A "not interlocked within tolerance" verdict whose motion, followed for real, moves the blocks apart.
 
     The motion keeps every contact within the input's tolerance.  Followed as a finite motion
     (:func:`~interlock.verify.motion.finite_motion`), it may move the blocks apart without overlap beyond
-    :data:`~interlock.verify.motion.OVERLAP_RTOL` of a block's volume: then the answer is the plain "not interlocked
-    (finite motion shown)".  A collision leaves the verdict as it was, except for a motion that only an inexact LP
-    point gave (:func:`_within_tolerance`): that one is then inconclusive.  (Not for a slide across a bent face: a
-    fold of 1e-7 blocks a unit block for real, yet overlaps it by less than that share of its volume.)
+    :data:`~interlock.verify.motion.OVERLAP_RTOL` of a block's volume; or else the pieces it moves, each as one rigid
+    body (``escapes``: :func:`_rigid_escapes`), may come apart with blocks reaching into each other by no more than
+    the input's precision (``depths``: :func:`~interlock.verify.tolerances.block_depths`, the rounding and noise of
+    each block, never a face's bend).  Then the answer is the plain "not interlocked (finite motion shown)".  A rounded file tilts the faces a part slides along by its rounding, so the part comes out only
+    through interference of that size.  A collision leaves the verdict as it was, except for a motion that only an
+    inexact LP point gave (:func:`_within_tolerance`): that one is then inconclusive.  (A slide across a designed
+    fold stays "within tolerance": a fold of 1e-7 blocks a unit block for real, yet overlaps it by less than
+    :data:`~interlock.verify.motion.OVERLAP_RTOL` of its volume, and its bend is no precision.)
     """
     from interlock.verify.motion import finite_motion
 
     shown = finite_motion(assembly, verdict.motion, frame=verdict.frame, budget=budget)
+    if not shown.shown and np.any(depths > DEPTH_RTOL * assembly.block_sizes):
+        # the motion LP's point may slide blocks of one piece into each other; a piece moved as a rigid body
+        # (``escapes``) is what a part sliding out of the file does
+        for motion in escapes or [verdict.motion]:
+            tried = finite_motion(assembly, motion, frame=verdict.frame, depth=depths, budget=budget)
+            if tried.shown:
+                return dataclasses.replace(verdict, interlocked=False, finite_motion=tried, motion=motion,
+                                           moving=tried.moving,
+                                           status=f"{tried.message}; first order: {verdict.status}")
     if not shown.shown and verdict.tolerances.get("motion_from") == "interior point":
         # no exact motion and none shown for real: a motion within tolerance of an inexact LP point is too little
         return dataclasses.replace(verdict, interlocked=None, finite_motion=shown, status=(

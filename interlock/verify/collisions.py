@@ -15,15 +15,24 @@ IDENTITY_RTOL = 1e-9
 
 
 class MotionOverlaps:
-    """Overlap volumes of moving blocks with every block whose bounding box they meet, one step at a time."""
+    """Overlap volumes of moving blocks with every block whose bounding box they meet, one step at a time.
 
-    def __init__(self, assembly: Assembly, moving, gap: float):
+    ``depth`` (one length per block, optional) lets a pair interfere: an
+    overlap whose measured :func:`~interlock.verify.validate.penetration` is at
+    most ``depth[i] + depth[j]`` is not counted (the blocks' faces lie within
+    that much of where the input puts them); ``deepest`` keeps the deepest such
+    interference met so far.
+    """
+
+    def __init__(self, assembly: Assembly, moving, gap: float, depth=None):
         import manifold3d
 
         self.manifold3d, self.assembly, self.gap = manifold3d, assembly, gap
         self.moving = np.asarray(moving, dtype=int)
+        self.depth = None if depth is None else np.broadcast_to(np.asarray(depth, dtype=float), (len(assembly),))
         self.shapes, self.fixed_solids = {}, {}
         self.booleans = 0
+        self.deepest = 0.0
 
     def _shape(self, t):
         if t not in self.shapes:
@@ -59,13 +68,30 @@ class MotionOverlaps:
                 if b not in solids:
                     solids[b] = self._placed(b, transforms[b]) if not still[b] else self._fixed(b)
             self.booleans += 1
-            volume = max(float((solids[i] ^ solids[j]).volume()), 0.0)
+            common = solids[i] ^ solids[j]
+            volume = max(float(common.volume()), 0.0)
             fraction = volume / min(a.volumes[i], a.volumes[j])
+            if fraction > 0 and self.depth is not None:
+                reach = self._penetration(i, j, transforms, common)
+                if reach <= self.depth[i] + self.depth[j]:
+                    self.deepest = max(self.deepest, reach)
+                    volume = fraction = 0.0
             if fraction > worst[1] or worst[2] is None:
                 worst = (volume, fraction, (i, j))
             if still[j] and apart:
                 apart = self._gap(solids[i], solids[j]) > self.gap
         return worst[0], worst[1], worst[2], apart
+
+    def _penetration(self, i: int, j: int, transforms, common) -> float:
+        from interlock.verify.validate import _penetration
+
+        a = self.assembly
+        meshes = []
+        for b in (i, j):
+            mesh = a.meshes[a.types[b]]
+            meshes.append(type(mesh)(mesh.vertices @ transforms[b, :3, :3].T + transforms[b, :3, 3], mesh.faces,
+                                     process=False))
+        return _penetration(meshes[0], meshes[1], common)
 
     def _fixed(self, b):
         if b not in self.fixed_solids:

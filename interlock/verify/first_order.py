@@ -17,7 +17,8 @@ import scipy.sparse.linalg
 
 from interlock.verify.budget import Budget
 
-__all__ = ["matrix_rank", "positive_stress", "opening_motion", "motion_lp", "interior_motion", "clarabel_settings",
+__all__ = ["matrix_rank", "positive_stress", "opening_motion", "motion_lp", "interior_motion", "rigid_cluster_motion",
+           "clarabel_settings",
            "LP_TOL",
            "RANK_CLEAR_RTOL", "GRAM_RESOLUTION", "GRAM_SURE_RTOL", "FARKAS_CLOSED_RTOLS", "PROJECTION_ROUNDS",
            "DENSE_COLUMNS", "MAX_KERNEL_PROBE", "SOLVER_THREADS", "FIRST_KERNEL_PROBE", "INVERSE_ITERATIONS"]
@@ -280,3 +281,77 @@ def motion_lp(A: sp.csr_matrix, tol: float, budget: Budget | None = None):
         return 0.0, np.zeros(A.shape[1])
     x, _ = interior_motion(A, budget)
     return opening_motion(A, x, tol)
+
+
+def rigid_cluster_motion(A, clusters, eps: np.ndarray, budget: Budget | None = None):
+    """A column vector that moves each cluster of free blocks as one rigid body, opening contacts as far as it can
+    while closing none by more than its tolerance, or None.
+
+    ``A`` is an :class:`~interlock.verify.matrix.InterlockingMatrix`, ``clusters`` lists the blocks (assembly
+    indices, all free) of each cluster, ``eps`` a tolerance per row (:func:`~interlock.verify.margin.row_tolerances`).
+    Cluster ``k`` turns with ``omega_k`` and moves with ``t_k`` about its mean centre ``p_k``; a block ``b`` of it
+    gets the columns ``(omega_k, (t_k + omega_k x (c_b - p_k)) / L)``, i.e. ``x = E y``.  The LP (HiGHS, 6 unknowns a
+    cluster) is ``min delta`` subject to ``A E y >= -delta eps`` and ``1^T A E y = 1``: the direction that closes the
+    least, in tolerances, for what it opens; accepted when ``delta <= |y|_inf``.  Translations first (a part slides
+    out), then twists.  Rows within a cluster are
+    zero in ``A E``: the motion a rounded file allows only by sliding its blocks into each other does not count.
+    None when no rigid motion opens a contact (the LP's value is at most ``eps``'s order) or the solver fails.
+
+    Examples
+    --------
+    Two cubes stacked on a fixed one: together they lift off, as one piece.
+
+    >>> import trimesh
+    >>> from interlock.blocks import Assembly
+    >>> from interlock.verify import interlocking_matrix
+    >>> tower = Assembly.from_meshes([trimesh.creation.box(bounds=[[0, 0, z], [1, 1, z + 1]]) for z in range(3)],
+    ...                              frame=[0])
+    >>> A = interlocking_matrix(tower)
+    >>> x = rigid_cluster_motion(A, [[1, 2]], np.full(A.shape[0], 1e-9))
+    >>> twists = A.twists(x)
+    >>> bool(np.allclose(twists[0], twists[1])), bool(np.all(twists[:, :3] == 0)), bool(twists[0, 5] > 0)
+    (True, True, True)
+    """
+    if A.translational:
+        return None
+    column_of = {int(b): k for k, b in enumerate(A.free)}
+    rows, cols, vals = [], [], []
+    for k, cluster in enumerate(clusters):
+        members = [column_of[int(b)] for b in cluster]
+        centre = A.centres[members].mean(axis=0)
+        for g in members:
+            d = (A.centres[g] - centre) / A.length_scale
+            cross = np.array([[0.0, -d[2], d[1]], [d[2], 0.0, -d[0]], [-d[1], d[0], 0.0]])
+            block = np.block([[np.eye(3), np.zeros((3, 3))], [-cross, np.eye(3)]])
+            r, c = np.nonzero(block)
+            rows.extend(6 * g + r), cols.extend(6 * k + c), vals.extend(block[r, c])
+    if not clusters:
+        return None
+    E = sp.csr_matrix((vals, (rows, cols)), shape=(A.shape[1], 6 * len(clusters)))
+    B = (A.matrix @ E).tocsr()
+    scale = np.abs(B).max(axis=1).toarray().ravel()
+    keep = scale > 1e-9 * max(float(scale.max(initial=0.0)), 1e-300)
+    if not keep.any():
+        return None
+    B, eps = B[keep], np.asarray(eps, dtype=float)[keep]
+    turning = np.tile(np.arange(6) < 3, len(clusters))
+    opening = np.asarray(B.sum(axis=0)).ravel()
+    for allowed in (~turning, np.ones_like(turning)):  # a translation first: the way a part slides out
+        # unknowns (y, delta): min delta subject to B y + delta eps >= 0 and 1^T B y = 1 (homogeneous: the
+        # direction that closes the least, in tolerances, for the contact it opens)
+        k = int(allowed.sum())
+        options = {} if budget is None or budget.solver_limit() is None else {"time_limit": budget.solver_limit()}
+        result = scipy.optimize.linprog(np.r_[np.zeros(k), 1.0], A_ub=-sp.hstack([B[:, allowed], eps[:, None]]),
+                                        b_ub=np.zeros(B.shape[0]), A_eq=np.r_[opening[allowed], 0.0][None],
+                                        b_eq=[1.0], bounds=[(None, None)] * k + [(0, None)], method="highs",
+                                        options=options)
+        if budget is not None:
+            budget.check("motion")
+        if result.status != 0 or result.x is None:
+            continue
+        y = np.zeros(B.shape[1])
+        y[allowed] = result.x[:k]
+        size = float(np.abs(y).max(initial=0.0))
+        if size > 0 and result.x[k] <= size:  # closes no row by more than its tolerance per unit of motion
+            return E @ (y / size)
+    return None

@@ -248,7 +248,7 @@ def moved(assembly: Assembly, motion, s: float, frame=None) -> Assembly:
 
 def finite_motion(assembly: Assembly, motion, *, frame=None, span=None, overlap_rtol: float = OVERLAP_RTOL,
                   reach_rtol: float = REACH_RTOL, steps: int = STEPS, small_steps=SMALL_STEPS,
-                  separation_rtol: float = SEPARATION_RTOL, budget=None) -> FiniteMotion:
+                  separation_rtol: float = SEPARATION_RTOL, depth=None, budget=None) -> FiniteMotion:
     """Move blocks along a motion by growing steps and measure whether they collide.
 
     :func:`~interlock.verify.check` decides *infinitesimal* interlocking
@@ -293,6 +293,14 @@ def finite_motion(assembly: Assembly, motion, *, frame=None, span=None, overlap_
     separation_rtol : float
         Stop once every moving block is farther than this (times the model
         size) from every block that does not move (:data:`SEPARATION_RTOL`).
+    depth : float or sequence of float, optional
+        A length per block (or one for all) by which two blocks may reach into
+        each other without colliding: an overlap above ``overlap_rtol`` whose
+        measured :func:`~interlock.verify.validate.penetration` is at most
+        ``depth[i] + depth[j]`` is interference within the input's precision
+        (:func:`~interlock.verify.check.check` passes each block's rounding,
+        never a face's bend).  The deepest one is reported
+        (``tolerances["interference"]``).  Default: none allowed.
     budget : Budget, optional
         A time budget (:mod:`interlock.verify.budget`), checked before every
         step: TimeLimitReached("beyond") when spent.
@@ -363,7 +371,11 @@ def finite_motion(assembly: Assembly, motion, *, frame=None, span=None, overlap_
     parameters = sorted(set(parameters) | {path.start + k / steps * (end - path.start) for k in range(1, steps + 1)})
     parameters = [s for s in parameters if path.start < s <= end]
 
-    measure = MotionOverlaps(assembly, moving, gap)
+    if depth is not None:
+        depth = np.asarray(depth, dtype=float)
+        if depth.shape not in ((), (len(assembly),)) or not np.all(np.isfinite(depth)) or np.any(depth < 0):
+            raise MotionError(f"depth must be a finite length >= 0, or one per block ({len(assembly)}), got {depth!r}")
+    measure = MotionOverlaps(assembly, moving, gap, depth)
     rows, collision, separated = [], None, False
     for k, s in enumerate(parameters):
         if budget is not None:  # a time budget (interlock.verify.budget): TimeLimitReached("beyond") when spent
@@ -381,8 +393,13 @@ def finite_motion(assembly: Assembly, motion, *, frame=None, span=None, overlap_
     s_list, d_list, v_list, f_list, p_list = (tuple(column) for column in zip(*rows))
     tolerances = {"overlap_rtol": overlap_rtol, "reach_rtol": reach_rtol, "separation_rtol": separation_rtol,
                   "steps": int(steps), "small_steps": list(small), "identity_rtol": IDENTITY_RTOL}
+    if depth is not None:
+        tolerances.update(depth=float(depth.max(initial=0.0)), interference=measure.deepest)
     shown = collision is None
     message = _message(shown, moving, collision, d_list, v_list, f_list, ending, size, overlap_rtol, len(rows))
+    if shown and measure.deepest > 0:
+        message += (f", the blocks reaching at most {measure.deepest:.2g} into each other (within the input's "
+                    f"precision, {float(depth.max(initial=0.0)):.2g} a block)")
     return FiniteMotion(shown, path.kind, moving, fixed, tuple(map(float, s_list)), tuple(map(float, d_list)),
                         tuple(map(float, v_list)), tuple(map(float, f_list)), p_list, collision, separated, ending,
                         float(path.start), float(size), float(reach), message, tolerances,

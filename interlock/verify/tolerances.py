@@ -12,7 +12,7 @@ from interlock.blocks.assembly import Assembly
 from interlock.verify.matrix import InterlockingMatrix
 from interlock.verify.precision import PRECISION_FACTOR, Precision
 
-__all__ = ["contact_tolerances", "block_noise", "too_coarse", "tolerance_source", "coarsest", "COARSE_RATIO",
+__all__ = ["contact_tolerances", "block_depths", "block_noise", "too_coarse", "tolerance_source", "coarsest", "COARSE_RATIO",
            "NOISE_CONTACTS", "NOISE_SHARE", "NOISE_SPREAD"]
 
 #: An input whose tolerance reaches this share of a contact's size (the square root of its area) is too coarse to
@@ -80,6 +80,32 @@ def contact_tolerances(found, precision: Precision, tolerance=None, bends: bool 
         return rounding
     own = np.array([np.nan if c.tolerance is None else c.tolerance for c in found], dtype=float)
     return np.where(np.isnan(own), rounding, np.maximum(own, rounding))
+
+
+def block_depths(found, precision: Precision, blocks: int, tolerance=None) -> np.ndarray:
+    """Per block, how far its faces may lie from where the input puts them: half of what a contact of two such
+    blocks is allowed without bends (:func:`contact_tolerances` with ``bends=False``), so that two blocks together
+    may reach that far into each other.
+
+    The rounding its numbers show (:data:`~interlock.verify.precision.PRECISION_FACTOR` times ``precision.read``)
+    plus :data:`NOISE_SPREAD` times its vertex noise (:func:`block_noise`); half of ``tolerance`` when one is given.
+    Never a face's bend: a designed fold blocks a slide for real, however small.
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace as Found
+    >>> rounded = Precision(np.array([1e-7, 1e-7, 0.0]), ["float32 input"] * 2 + ["exact"], read=np.array([1e-7, 1e-7, 0.0]))
+    >>> block_depths([Found(i=0, j=1, deviation=0.0)], rounded, 3).tolist()
+    [2e-07, 2e-07, 0.0]
+    """
+    if tolerance is not None:
+        return np.full(blocks, 0.5 * float(tolerance))
+    delta = precision.delta if precision.read is None else precision.read
+    depths = 0.5 * PRECISION_FACTOR * np.asarray(delta, dtype=float)[:blocks].copy()
+    if len(found):
+        noise = block_noise(found)
+        depths[:len(noise)] += NOISE_SPREAD * noise[:blocks]
+    return depths
 
 
 def block_noise(found) -> np.ndarray:

@@ -54,8 +54,14 @@ def test_float32_bunny_with_one_fixed_part_is_not_interlocked(bunny_float32, fra
     assembly, found = bunny_float32
     verdict = check(assembly, frame=frame, contacts=found)
     assert verdict.interlocked is False and verdict.motion_kind == "within tolerance"
-    assert verdict.margin.upper <= 1.0 and "not interlocked within tolerance" in str(verdict)
-    assert verdict.tolerances["tolerance_from"] == "float32 input"
+    assert verdict.margin.upper <= 1.0 and verdict.tolerances["tolerance_from"] == "float32 input"
+    shown = verdict.finite_motion
+    if shown is not None and shown.shown:  # the part came out, its blocks reaching into others within the rounding
+        assert str(verdict).startswith("not interlocked (finite motion shown)")
+        assert 0 <= shown.tolerances["interference"] <= 2 * shown.tolerances["depth"]
+        assert "within the input's precision" in str(verdict)
+    else:
+        assert "not interlocked within tolerance" in str(verdict)
 
 
 @pytest.mark.parametrize("frame", [[0, 1], [0, 79]])
@@ -361,3 +367,57 @@ def test_a_failed_upper_bound_is_reported(small_hexagon, monkeypatch):
     result = module.assess(A, found, assembly.scale, np.ones(A.shape[0]), 1e-2 * assembly.scale, "given")
     assert result.lower <= 1 and np.isinf(result.upper)
     assert result.upper_status.startswith("solver failed") and "upper bound: solver failed" in str(result)
+
+
+# --- a part that slides out of a rounded file ------------------------------------------------------------
+
+
+@pytest.mark.parametrize("family", ["float32 STL", "7 digits"])
+def test_a_part_of_a_rounded_file_slides_out_through_interference_within_its_precision(family):
+    """The TopoLite cube with part 9 fixed is not interlocked: part 1 slides out (float64, an exact motion).  Placed
+    far away and rounded, the faces it slides along tilt by the rounding and jam at first order ("within
+    tolerance"); moved as a rigid body it comes out with the blocks reaching into each other by less than each
+    block's rounding allows, so the answer is the plain "not interlocked (finite motion shown)"."""
+    from benchmarks.real_files import perturbed
+    from interlock.verify.precision import block_precision
+    from interlock.verify.tolerances import block_depths
+
+    rounded = perturbed("TopoLite cube", 0, family)
+    verdict = check(rounded, frame=[8])
+    assert verdict.interlocked is False and verdict.motion_kind == "within tolerance"
+    shown = verdict.finite_motion
+    assert shown.shown and shown.separated and shown.moving == (0,)
+    assert str(verdict).startswith("not interlocked (finite motion shown): block 0 moves")
+    assert "within the input's precision" in str(verdict)
+    depths = block_depths(contacts(rounded), block_precision(rounded), len(rounded))
+    assert 0 < shown.tolerances["interference"] <= depths[0] + depths.max()
+    # the same motion with no interference allowed collides: the rounding, not the motion, was in the way
+    assert not finite_motion(rounded, verdict.motion, frame=[8]).shown
+    exact = check(perturbed("TopoLite cube", 0, "float64"), frame=[8])
+    assert exact.interlocked is False and exact.motion_kind == "opening" and exact.moving == (0,)
+
+
+def test_finite_motion_lets_blocks_interfere_only_as_deep_as_allowed():
+    """A unit cube lifted out of a slot whose walls lean in by 1e-5 (per unit height): it scrapes 1e-5 deep, an
+    overlap of 5e-6 of its volume, above the volume tolerance 1e-6."""
+    from interlock.verify.motion import MotionError
+
+    lean = 1e-5
+    left = trimesh.Trimesh([[-1, 0, 0], [0, 0, 0], [-1, 1, 0], [0, 1, 0], [-1, 0, 1], [lean, 0, 1], [-1, 1, 1],
+                            [lean, 1, 1]], process=False)
+    wall = trimesh.convex.convex_hull(left.vertices)
+    other = trimesh.convex.convex_hull(left.vertices * [-1, 1, 1] + [1, 0, 0])
+    floor = trimesh.creation.box(bounds=[[-1, 0, -1], [2, 1, 0]])
+    cube = trimesh.creation.box(bounds=[[0, 0, 0], [1, 1, 1]])
+    slot = Assembly.from_meshes([wall, other, floor, cube], frame=[0, 1, 2])
+    lift = np.zeros((4, 6))
+    lift[3, 5] = 1.0
+    assert not finite_motion(slot, lift).shown
+    assert not finite_motion(slot, lift, depth=1e-8).shown
+    scraped = finite_motion(slot, lift, depth=1e-5)
+    assert scraped.shown and scraped.separated
+    assert scraped.tolerances["interference"] == pytest.approx(lean, rel=0.05) and scraped.tolerances["depth"] == 1e-5
+    with pytest.raises(MotionError, match="depth must be"):
+        finite_motion(slot, lift, depth=-1.0)
+    with pytest.raises(MotionError, match="depth must be"):
+        finite_motion(slot, lift, depth=[1e-5, 1e-5])
