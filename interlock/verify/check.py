@@ -38,7 +38,7 @@ __all__ = ["Verdict", "check", "beyond_first_order", "block_noise", "opening_mot
            "FARKAS_CLOSED_RTOLS", "PROJECTION_ROUNDS", "STAGES", "RANK_RTOL", "RANK_CLEAR_RTOL", "GRAM_RESOLUTION",
            "GRAM_SURE_RTOL", "LP_TOL", "LP_SOLVERS", "MOVING_RTOL", "DENSE_COLUMNS", "FIRST_KERNEL_PROBE",
            "COARSE_RATIO", "NOISE_CONTACTS", "NOISE_SPREAD", "SOLVER_THREADS", "MAX_KERNEL_PROBE",
-           "INVERSE_ITERATIONS", "DEPTH_RTOL", "ESCAPE_BLOCKS"]
+           "INVERSE_ITERATIONS", "DEPTH_RTOL", "ESCAPE_BLOCKS", "ESCAPE_SEARCH"]
 
 #: A singular value at most ``RANK_RTOL * sigma_max`` is zero ...
 RANK_RTOL = 1e-9
@@ -51,6 +51,8 @@ LP_SOLVERS = ("clarabel", "highs")
 DEPTH_RTOL = 1e-9
 #: ... and then with the single moving blocks that open the most, each moved alone as a rigid body: at most this many.
 ESCAPE_BLOCKS = 4
+#: Single blocks are tried only when at most this many move (one small LP each).
+ESCAPE_SEARCH = 200
 #: The stages of :func:`check`, in order, as reported to its ``progress`` callback and in ``timings``.
 STAGES = ("validate", "contacts", "matrix", "rank", "lp", "margin", "motion", "certify", "beyond")
 
@@ -397,9 +399,9 @@ def _decide(assembly, frame, translational, certify, rank_rtol, lp_tol, contacts
     if verdict.motion is not None and verdict.motion_kind == "within tolerance":
         # a motion the tolerances leave open: moved for real, it either shows the blocks coming apart or collides
         with _stage(timings, "motion", progress, budget):
-            escapes = _rigid_escapes(A, found, limits, verdict, len(assembly), budget)
             verdict = _shown_finitely(assembly, verdict, block_depths(found, precision, len(assembly), tolerance),
-                                      escapes, budget)
+                                      lambda: _rigid_escapes(A, found, limits, verdict, len(assembly), budget),
+                                      budget)
     if certify:
         from interlock.verify.certify import certify_verdict
 
@@ -441,7 +443,8 @@ def _rigid_escapes(A: InterlockingMatrix, found, limits, verdict: Verdict, block
                    budget: Budget | None = None) -> list:
     """Per-block twists (one array each) that move pieces of the verdict's moving blocks as rigid bodies within the
     tolerances (:func:`~interlock.verify.first_order.rigid_cluster_motion`): first every cluster the moving blocks'
-    contacts join, then single blocks, the most opening first (at most :data:`ESCAPE_BLOCKS`)."""
+    contacts join, then single blocks (up to :data:`ESCAPE_SEARCH` moving ones), the most opening first (at most
+    :data:`ESCAPE_BLOCKS`)."""
     moving = np.asarray(verdict.moving, dtype=int)
     if len(moving) == 0 or A.translational:
         return []
@@ -453,7 +456,7 @@ def _rigid_escapes(A: InterlockingMatrix, found, limits, verdict: Verdict, block
     clusters = [moving[label[moving] == k] for k in np.unique(label[moving])]
     eps = row_tolerances(A, found, np.maximum(limits, np.finfo(float).tiny))
     escapes = [rigid_cluster_motion(A, clusters, eps, budget)]
-    if len(moving) > 1:  # a part that slides out alone, where the LP's point moved its neighbours along
+    if 1 < len(moving) <= ESCAPE_SEARCH:  # a part that slides out alone, where the LP's point moved others along
         alone = [(rigid_cluster_motion(A, [[b]], eps, budget), b) for b in moving]
         opened = sorted(((float(np.maximum(A.matrix @ x, 0.0).sum()), int(b), x) for x, b in alone if x is not None),
                         key=lambda item: (-item[0], item[1]))
@@ -461,17 +464,18 @@ def _rigid_escapes(A: InterlockingMatrix, found, limits, verdict: Verdict, block
     return [_motion(A, x, blocks, reversible=False)[0] for x in escapes if x is not None]
 
 
-def _shown_finitely(assembly: Assembly, verdict: Verdict, depths: np.ndarray, escapes=(),
+def _shown_finitely(assembly: Assembly, verdict: Verdict, depths: np.ndarray, escapes=list,
                     budget: Budget | None = None) -> Verdict:
     """A "not interlocked within tolerance" verdict whose motion, followed for real, moves the blocks apart.
 
     The motion keeps every contact within the input's tolerance.  Followed as a finite motion
     (:func:`~interlock.verify.motion.finite_motion`), it may move the blocks apart without overlap beyond
     :data:`~interlock.verify.motion.OVERLAP_RTOL` of a block's volume; or else the pieces it moves, each as one rigid
-    body (``escapes``: :func:`_rigid_escapes`), may come apart with blocks reaching into each other by no more than
-    the input's precision (``depths``: :func:`~interlock.verify.tolerances.block_depths`, the rounding and noise of
-    each block, never a face's bend).  Then the answer is the plain "not interlocked (finite motion shown)".  A rounded file tilts the faces a part slides along by its rounding, so the part comes out only
-    through interference of that size.  A collision leaves the verdict as it was, except for a motion that only an
+    body (``escapes()``: :func:`_rigid_escapes`), may come apart with blocks reaching into each other by no more
+    than the input's precision (``depths``: :func:`~interlock.verify.tolerances.block_depths`, the rounding and noise
+    of each block, never a face's bend).  Then the answer is the plain "not interlocked (finite motion shown)".  A
+    rounded file tilts the faces a part slides along by its rounding, so the part comes out only through
+    interference of that size.  A collision leaves the verdict as it was, except for a motion that only an
     inexact LP point gave (:func:`_within_tolerance`): that one is then inconclusive.  (A slide across a designed
     fold stays "within tolerance": a fold of 1e-7 blocks a unit block for real, yet overlaps it by less than
     :data:`~interlock.verify.motion.OVERLAP_RTOL` of its volume, and its bend is no precision.)
@@ -482,7 +486,7 @@ def _shown_finitely(assembly: Assembly, verdict: Verdict, depths: np.ndarray, es
     if not shown.shown and np.any(depths > DEPTH_RTOL * assembly.block_sizes):
         # the motion LP's point may slide blocks of one piece into each other; a piece moved as a rigid body
         # (``escapes``) is what a part sliding out of the file does
-        for motion in escapes or [verdict.motion]:
+        for motion in escapes() or [verdict.motion]:
             tried = finite_motion(assembly, motion, frame=verdict.frame, depth=depths, budget=budget)
             if tried.shown:
                 return dataclasses.replace(verdict, interlocked=False, finite_motion=tried, motion=motion,

@@ -12,8 +12,8 @@ from interlock.blocks.assembly import Assembly
 from interlock.verify.matrix import InterlockingMatrix
 from interlock.verify.precision import PRECISION_FACTOR, Precision
 
-__all__ = ["contact_tolerances", "block_depths", "block_noise", "too_coarse", "tolerance_source", "coarsest", "COARSE_RATIO",
-           "NOISE_CONTACTS", "NOISE_SHARE", "NOISE_SPREAD"]
+__all__ = ["contact_tolerances", "block_depths", "block_noise", "too_coarse", "tolerance_source", "coarsest",
+           "COARSE_RATIO", "NOISE_CONTACTS", "NOISE_SHARE", "NOISE_SPREAD"]
 
 #: An input whose tolerance reaches this share of a contact's size (the square root of its area) is too coarse to
 #: decide where the margin does not: the 4-digit bunny's faces are bent by 0.0036 on contacts 0.06 across.
@@ -94,7 +94,8 @@ def block_depths(found, precision: Precision, blocks: int, tolerance=None) -> np
     Examples
     --------
     >>> from types import SimpleNamespace as Found
-    >>> rounded = Precision(np.array([1e-7, 1e-7, 0.0]), ["float32 input"] * 2 + ["exact"], read=np.array([1e-7, 1e-7, 0.0]))
+    >>> rounding = np.array([1e-7, 1e-7, 0.0])
+    >>> rounded = Precision(rounding, ("float32", "float32", "grid"), read=rounding)
     >>> block_depths([Found(i=0, j=1, deviation=0.0)], rounded, 3).tolist()
     [2e-07, 2e-07, 0.0]
     """
