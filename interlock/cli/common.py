@@ -139,6 +139,12 @@ def check_frames_option(args) -> None:
         raise InterlockError(f"cannot write the frames into {frames}: {problem}")
 
 
+def command_started(args) -> float:
+    """When the command began (``time.perf_counter``): the start of :func:`interlock.cli.main`, before the
+    arguments were parsed, so that ``--time-limit`` bounds the whole wait; now for ``args`` made elsewhere."""
+    return getattr(args, "started", None) or time.perf_counter()
+
+
 def time_limit(seconds, started: float) -> float | None:
     """What is left of ``--time-limit`` (``seconds``) after what the command has spent since ``started`` (imports,
     reading the files), at least a millisecond; ``None`` without a limit.  A bad value is refused."""

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 
-from interlock import wallpaper
 from interlock.cli.common import (block_limit, edge_points, lattice_arguments, length, numbers, output_arguments,
                                   whole_number)
 from interlock.cli.convert import sized, unit_arguments
@@ -80,6 +79,7 @@ def write_assembly(assembly, args) -> int:
 def run_wallpaper(args) -> int:
     import math
 
+    from interlock import wallpaper  # numpy and shapely: imported by the commands that use them
     from interlock.blocks import escher_block, patch
 
     group = wallpaper.group(args.group, a=args.a, b=args.b, gamma=args.gamma)

@@ -3,9 +3,12 @@
 from __future__ import annotations
 
 import json
+from typing import TYPE_CHECKING
 
-from interlock import wallpaper
 from interlock.cli.common import lattice_arguments
+
+if TYPE_CHECKING:  # the commands import interlock.wallpaper (numpy, shapely) when they run, not at start-up
+    from interlock.wallpaper import WallpaperGroup
 
 
 def add_parser(commands) -> None:
@@ -31,7 +34,7 @@ def add_parser(commands) -> None:
     one.set_defaults(run=run_group)
 
 
-def group_record(g: wallpaper.WallpaperGroup) -> dict:
+def group_record(g: WallpaperGroup) -> dict:
     domain = g.fundamental_domain()
     return {
         "name": g.name,
@@ -51,6 +54,8 @@ def group_record(g: wallpaper.WallpaperGroup) -> dict:
 
 
 def run_groups(args) -> int:
+    from interlock import wallpaper
+
     records = [group_record(wallpaper.group(name)) for name in wallpaper.GROUPS]
     if args.json:
         print(json.dumps(records, indent=2))
@@ -64,6 +69,8 @@ def run_groups(args) -> int:
 
 
 def run_group(args) -> int:
+    from interlock import wallpaper
+
     record = group_record(wallpaper.group(args.name, a=args.a, b=args.b, gamma=args.gamma))
     if args.json:
         print(json.dumps(record, indent=2))

@@ -5,7 +5,6 @@ from __future__ import annotations
 import argparse
 import json
 
-from interlock import wallpaper
 from interlock.cli.common import edge_points, lattice_arguments, length, numbers, whole_number
 from interlock.cli.verify import EXIT_STATUS, exit_status
 from interlock.errors import InterlockError
@@ -45,6 +44,8 @@ def run(args) -> int:
     if args.staircase is not None:
         cell = rhomblock_assembly(staircase(numbers(args.staircase, int, "--staircase")), args.variant)
     else:
+        from interlock import wallpaper  # numpy and shapely: imported by the commands that use them
+
         group = wallpaper.group(args.group, a=args.a, b=args.b, gamma=args.gamma)
         block = escher_block(group, dict(edge_points(text) for text in args.deform), height=args.height)
         cell = periodic_cell(block)

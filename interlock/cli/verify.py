@@ -4,10 +4,9 @@ from __future__ import annotations
 
 import argparse
 import json
-import time
 
 from interlock.cli.common import (EXIT_BAD_INPUT, FRAME_FROM, MESH_FORMATS, MOVING_SHOWN, check_frames_option,
-                                  frame_text, load, real_number, time_limit, whole_number)
+                                  command_started, frame_text, load, real_number, time_limit, whole_number)
 from interlock.cli.view import add_html_argument, write_html
 
 #: The exit status of ``verify`` and ``periodic`` by their answer, as diff and grep answer with theirs; bad input
@@ -59,7 +58,7 @@ def add_parser(commands) -> None:
 
 def run(args) -> int:
     check_frames_option(args)
-    started = time.perf_counter()
+    started = command_started(args)
     time_limit(args.time_limit, started)
     from interlock.verify import check
 

@@ -5,9 +5,8 @@ from __future__ import annotations
 
 import argparse
 import sys
-import time
 
-from interlock.cli.common import MESH_FORMATS, load, time_limit
+from interlock.cli.common import MESH_FORMATS, command_started, load, time_limit
 from interlock.errors import InterlockError
 
 __all__ = ["add_parser", "run", "add_html_argument", "write_html"]
@@ -48,7 +47,7 @@ def add_parser(commands) -> None:
 
 
 def run(args) -> int:
-    started = time.perf_counter()
+    started = command_started(args)
     time_limit(args.time_limit, started)
     if args.stability and args.mu is None:
         raise InterlockError("--stability needs the friction coefficient: give --mu, e.g. --mu 0.6")

@@ -4,6 +4,7 @@ to a file; the suffix picks the format's module (meshio's ``read`` and ``write``
 from __future__ import annotations
 
 import contextlib
+import importlib
 import os
 import warnings
 from collections.abc import Sequence
@@ -15,7 +16,6 @@ import trimesh
 from interlock.blocks.assembly import MAX_COORDINATE, Assembly
 from interlock.blocks.info import restored
 from interlock.files import unwritable
-from interlock.formats import compas, gltf, obj, off, ply, rhino, stl, threemf, vtu
 from interlock.formats.bodies import split_bodies
 from interlock.formats.common import GLTF_TO_Z_UP, FormatError, MeshFile, as_assembly
 from interlock.formats.scene import quiet_trimesh, read_scene
@@ -60,12 +60,19 @@ LABELLED_FORMATS = (".obj", ".ply", ".off", ".glb", ".3mf", ".3dm", ".json")
 #: The up-axis of the formats that have a convention of their own; the others are written +Z up unless
 #: ``up="y"`` is asked for, and say which in their header.
 UP_CONVENTIONS = {".glb": "y", ".gltf": "y", ".3mf": "z", ".3dm": "z", ".json": "z"}
-# the readers of mesh files; None: every body of the trimesh scene (plain STL, plain PLY, OFF, ...)
-_MESH_READERS = {".stl": stl.read_stl, ".ply": ply.read_ply, ".obj": obj.read_obj, ".off": off.read_off,
-                 ".vtu": vtu.read_vtu, ".xdmf": vtu.read_vtu, ".glb": gltf.read_gltf, ".gltf": gltf.read_gltf,
-                 ".3mf": threemf.read_3mf}
-_WRITERS = {".stl": stl.write_stl, ".obj": obj.write_obj, ".ply": ply.write_ply, ".off": off.write_off,
-            ".vtu": vtu.write_vtu, ".xdmf": vtu.write_vtu}
+# the readers of mesh files, as (module of interlock.formats, function), imported by _format when a file of that
+# format is read or written (reading an OBJ imports no Rhino, COMPAS, glTF or 3MF code); a suffix not here: every
+# body of the trimesh scene (plain STL, plain PLY, OFF, ...)
+_MESH_READERS = {".stl": ("stl", "read_stl"), ".ply": ("ply", "read_ply"), ".obj": ("obj", "read_obj"),
+                 ".off": ("off", "read_off"), ".vtu": ("vtu", "read_vtu"), ".xdmf": ("vtu", "read_vtu"),
+                 ".glb": ("gltf", "read_gltf"), ".gltf": ("gltf", "read_gltf"), ".3mf": ("threemf", "read_3mf")}
+_WRITERS = {".stl": ("stl", "write_stl"), ".obj": ("obj", "write_obj"), ".ply": ("ply", "write_ply"),
+            ".off": ("off", "write_off"), ".vtu": ("vtu", "write_vtu"), ".xdmf": ("vtu", "write_vtu")}
+
+
+def _format(module: str, function: str):
+    """``interlock.formats.<module>.<function>``, the module imported on first use."""
+    return getattr(importlib.import_module(f"interlock.formats.{module}"), function)
 
 
 def read(paths, frame=None, *, unit=None, up=None, progress=None) -> Assembly:
@@ -184,15 +191,15 @@ def write(obj, path, *, unit=None, up=None, progress=None) -> Path:
     with _quiet():
         try:
             if suffix in _WRITERS:
-                _WRITERS[suffix](turned(assembly, up), path, up=up)
+                _format(*_WRITERS[suffix])(turned(assembly, up), path, up=up)
             elif suffix == ".glb":
-                gltf.write_gltf(assembly, path)
+                _format("gltf", "write_gltf")(assembly, path)
             elif suffix == ".3mf":
-                threemf.write_3mf(assembly, path)
+                _format("threemf", "write_3mf")(assembly, path)
             elif suffix == ".3dm":
-                rhino.write_3dm(assembly, path, progress=progress)
+                _format("rhino", "write_3dm")(assembly, path, progress=progress)
             else:
-                compas.write_compas(assembly, path, progress=progress)
+                _format("compas", "write_compas")(assembly, path, progress=progress)
         except OSError as error:
             raise FormatError(f"cannot write {path}: {error.strerror or error}") from None
         except ImportError as error:  # meshio writes XDMF only with h5py installed
@@ -236,10 +243,10 @@ def _read(paths, frame, up, progress) -> Assembly:
             if up is not None and up != UP_CONVENTIONS[suffix]:
                 raise FormatError(_convention(suffix, up))
             if suffix == ".3dm":
-                assembly = rhino.read_3dm(paths, frame, progress=progress)
+                assembly = _format("rhino", "read_3dm")(paths, frame, progress=progress)
             else:  # COMPAS; frame: node keys
-                assembly = compas.load_compas(paths, supports=None if frame is None else list(frame),
-                                              progress=progress)
+                assembly = _format("compas", "load_compas")(paths, supports=None if frame is None else list(frame),
+                                                            progress=progress)
                 assembly.info["frame_from"] = assembly.info["supports_from"]
             _check_coordinates(paths, assembly.meshes)
             return assembly
@@ -278,7 +285,7 @@ def _mesh_file(path: Path, split: bool, up) -> MeshFile:
         raise FormatError(f"{path.name} is not a mesh file; read it with interlock.read")
     if up is not None and suffix in UP_CONVENTIONS and up != UP_CONVENTIONS[suffix] and suffix != ".3mf":
         raise FormatError(_convention(suffix, up))
-    reader = _MESH_READERS.get(suffix)
+    reader = _format(*_MESH_READERS[suffix]) if suffix in _MESH_READERS else None
     try:
         found = reader(path) if reader is not None else None
         if found is None:  # a plain STL or PLY file, OFF, another format trimesh reads

@@ -14,18 +14,26 @@ the theory, with the CRA paper's numbering, is in ``docs/statics.md``.
 True
 """
 
-from interlock.verify.statics.cra import (DEFAULT_FORCE_BOUND, DEFAULT_MIN_SLIDE, DEFAULT_SECTORS, REFINED_SECTORS,
-                                          CRAResult, cra)
-from interlock.verify.statics.equilibrium import (CONES, DEFAULT_EPS, DEFAULT_ETA, DEFAULT_SIDES, FRICTION_RTOL,
-                                                  StabilityError, StabilityResult)
-from interlock.verify.statics.interfaces import (DEFAULT_AREA_THICKNESS, DEFAULT_GAP_THICKNESS, Interfaces,
-                                                 compas_interfaces, thickness)
-from interlock.verify.statics.rbe import rbe
-from interlock.verify.statics.tilt import (DEFAULT_TILT_STEP, DEFAULT_TILT_TOL, TILT_AXES, TiltScan, critical_tilt,
-                                          tilt_scan, tilted_gravity)
+from interlock import lazy_exports
+
+# where each exported name lives; each is imported on first use (:func:`interlock.lazy_exports`), so RBE does not
+# load CRA's modules
+_HOMES = {
+    **dict.fromkeys(["DEFAULT_FORCE_BOUND", "DEFAULT_MIN_SLIDE", "DEFAULT_SECTORS", "REFINED_SECTORS", "CRAResult",
+                     "cra"], "interlock.verify.statics.cra"),
+    **dict.fromkeys(["CONES", "DEFAULT_EPS", "DEFAULT_ETA", "DEFAULT_SIDES", "FRICTION_RTOL", "StabilityError",
+                     "StabilityResult"], "interlock.verify.statics.equilibrium"),
+    **dict.fromkeys(["DEFAULT_AREA_THICKNESS", "DEFAULT_GAP_THICKNESS", "Interfaces", "compas_interfaces",
+                     "thickness"], "interlock.verify.statics.interfaces"),
+    "rbe": "interlock.verify.statics.rbe",
+    **dict.fromkeys(["DEFAULT_TILT_STEP", "DEFAULT_TILT_TOL", "TILT_AXES", "TiltScan", "critical_tilt", "tilt_scan",
+                     "tilted_gravity"], "interlock.verify.statics.tilt"),
+}
 
 __all__ = ["rbe", "StabilityResult", "StabilityError", "cra", "CRAResult", "critical_tilt", "tilt_scan", "TiltScan",
            "tilted_gravity",
            "TILT_AXES", "CONES", "DEFAULT_SIDES", "DEFAULT_TILT_STEP", "DEFAULT_TILT_TOL", "DEFAULT_EPS", "DEFAULT_ETA",
            "DEFAULT_SECTORS", "DEFAULT_FORCE_BOUND", "DEFAULT_MIN_SLIDE", "REFINED_SECTORS", "FRICTION_RTOL",
            "Interfaces", "compas_interfaces", "thickness", "DEFAULT_GAP_THICKNESS", "DEFAULT_AREA_THICKNESS"]
+
+__getattr__, __dir__ = lazy_exports(__name__, _HOMES)

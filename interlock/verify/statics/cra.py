@@ -300,21 +300,24 @@ def cra(assembly, mu: float, density: float = 1.0, gravity=(0.0, 0.0, -1.0), fra
     if backend not in ("milp", "compas_cra"):
         raise StabilityError(f"backend must be 'milp' or 'compas_cra', got {backend!r}")
     problem = CRAProblem.build(assembly, mu, density, frame, cone, sides, eps, eta, force_bound, min_slide, contacts,
-                               milp_nodes)
+                               milp_nodes, budget)
     if backend == "compas_cra":
         return problem.check_upstream(assembly, gravity)
     return problem.solve(gravity, sectors, budget, progress=progress, hold_out=hold_out)
 
 
-def decider(assembly, mu: float, sectors: int = DEFAULT_SECTORS, time_limit=DEFAULT_TIME_LIMIT, **options):
+def decider(assembly, mu: float, sectors: int = DEFAULT_SECTORS, time_limit=DEFAULT_TIME_LIMIT,
+            budget: Budget | None = None, hold_out: bool = False, **options):
     """``(gravity, budget=None) -> CRAResult``: :func:`cra` under many loads, with contacts and matrices built
     once (for :func:`~interlock.verify.statics.tilt_scan`); ``options`` as for :func:`cra`.  ``time_limit``:
-    seconds for each load; ``budget``, if given, bounds the call as well (the scan's).
+    seconds for each load; ``budget``, if given, bounds the call as well (the scan's); given here, it also bounds
+    the contact search.  ``hold_out``: as for :func:`cra`, but off by default (the scan's route so far;
+    ``stability --no-hold-out --tilt-axis`` passed it to the problem's build, a TypeError).
 
     The motions of earlier stable loads are tried first (a tilt scan moves the load a little at a time).
     """
     Budget.start(time_limit)  # checked here, started per load
-    problem = CRAProblem.build(assembly, mu, **options)
+    problem = CRAProblem.build(assembly, mu, budget=budget, **options)
     sectors = _sector_count(sectors)
     known: list[np.ndarray] = []
 
@@ -322,7 +325,7 @@ def decider(assembly, mu: float, sectors: int = DEFAULT_SECTORS, time_limit=DEFA
         own = Budget.start(time_limit)
         if budget is not None and budget.started + budget.limit < own.started + own.limit:
             own = budget
-        result = problem.solve(gravity_vector(gravity), sectors, own, known)
+        result = problem.solve(gravity_vector(gravity), sectors, own, known, hold_out=hold_out)
         if result.stable:
             known.insert(0, problem.internal_motion(result.motion))
             del known[WARM_STARTS:]
@@ -369,8 +372,11 @@ class CRAProblem:
     @classmethod
     def build(cls, assembly, mu, density=1.0, frame=None, cone="paper", sides=DEFAULT_SIDES, eps=DEFAULT_EPS,
               eta=DEFAULT_ETA, force_bound=DEFAULT_FORCE_BOUND, min_slide=DEFAULT_MIN_SLIDE, contacts=None,
-              milp_nodes=MILP_NODES):
-        system = EquilibriumSystem.build(assembly, mu, density, frame, cone, sides, contacts)
+              milp_nodes=MILP_NODES, budget=None):
+        """The problem; with a ``budget``, the contact search runs under it (when it runs out there, the system
+        has no contacts and :meth:`solve` under the same budget answers "inconclusive: time limit reached in the
+        contacts")."""
+        system = EquilibriumSystem.build(assembly, mu, density, frame, cone, sides, contacts, budget)
         eps, eta = positive("eps", eps), positive("eta", eta)
         if not eps < eta:
             raise StabilityError(f"eps (overlap) must be smaller than eta (displacement bound), got {eps} >= {eta}")

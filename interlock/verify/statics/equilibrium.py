@@ -69,6 +69,9 @@ MU_MAX = 1e15
 #: (solver: ...)".  The largest RBE LP decided in the tests (the armadillo's 31,000 unknowns) takes about 9,000
 #: simplex iterations.
 RBE_ITERATIONS = 50_000
+#: ``parameters["contacts"]["model"]`` of a system whose contact search ran out of time: it has no contacts, and
+#: every solve of it raises TimeLimitReached ("the contacts") instead of answering "no contacts carry the load".
+CONTACTS_OUT_OF_TIME = "not found: time limit reached in the contacts"
 
 
 class StabilityError(InterlockError):
@@ -197,7 +200,7 @@ class EquilibriumSystem:
         try:
             found, contact_model = statics_contacts(assembly, contacts, budget)
         except TimeLimitReached:
-            found, contact_model = (), {"model": "not found: time limit reached in the contacts"}
+            found, contact_model = (), {"model": CONTACTS_OUT_OF_TIME}
         found_at = time.perf_counter()
         free = np.setdiff1d(np.arange(len(assembly)), fixed)
         column_of = np.full(len(assembly), -1)
@@ -236,6 +239,8 @@ class EquilibriumSystem:
         decided, the last one's status with ``message`` ``"solver: ..."`` saying what each said.  ``budget``
         bounds every solve (:class:`~interlock.verify.budget.TimeLimitReached` when it runs out).
         """
+        if self.parameters["contacts"].get("model") == CONTACTS_OUT_OF_TIME:  # no contacts, not "none carry it"
+            raise TimeLimitReached("the contacts")
         budget = budget or Budget()
         load = np.outer(self.weights, gravity)
         total = float(np.abs(load).sum()) or 1.0

@@ -101,13 +101,15 @@ class Interfaces:
                 if len(self.thickness) else []}
 
 
-def thickness(assembly: Assembly) -> np.ndarray:
+def thickness(assembly: Assembly, budget=None) -> np.ndarray:
     """Each block's thickness: the least width of its convex hull over the hull's face normals (model units).
 
     Exact for boxes and prisms (the distance between the closest parallel
     faces); for other shapes an upper bound of the least width, attained on a
     face of the hull.  Computed once per block type (rigid motions and mirror
-    images keep widths).
+    images keep widths).  ``budget`` (:class:`~interlock.verify.budget.Budget`) is checked between block
+    types (TimeLimitReached, "the contacts"): a file read as one mesh per block has as many types as blocks,
+    and their hulls took 0.7 s on a 300-block hexagon.
 
     >>> import trimesh
     >>> slab = trimesh.creation.box(extents=[4, 2, 0.5])
@@ -118,6 +120,8 @@ def thickness(assembly: Assembly) -> np.ndarray:
         raise InterfaceError(f"expected an interlock Assembly, got {type(assembly).__name__}")
     per_type = np.empty(len(assembly.meshes))
     for t, mesh in enumerate(assembly.meshes):
+        if budget is not None:
+            budget.check("the contacts")
         hull = mesh.convex_hull
         heights = hull.vertices @ hull.face_normals.T
         per_type[t] = float((heights.max(axis=0) - heights.min(axis=0)).min())
@@ -196,7 +200,7 @@ def interfaces(assembly: Assembly, gap: float = DEFAULT_GAP_THICKNESS, area: flo
     gap, area, rtol = (_tolerance(name, value) for name, value in (("gap", gap), ("area", area), ("rtol", rtol)))
     if not gap < math.pi / 4:
         raise InterfaceError(f"gap must be below pi / 4 of the thickness (the tilt 2 gap < pi / 2), got {gap}")
-    widths = thickness(assembly)
+    widths = thickness(assembly, budget)
     angle = 2.0 * gap
     empty = Interfaces((), widths, gap, angle, area, rtol)
     if len(assembly) < 2:

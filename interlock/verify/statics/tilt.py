@@ -174,13 +174,13 @@ def tilt_scan(assembly: Assembly, axis, mu: float, method: str = "rbe", density:
     budget = Budget.start(time_limit)
     started = time.perf_counter()
     if method == "rbe":
-        system = EquilibriumSystem.build(assembly, mu, density, frame, cone, sides, contacts)
+        system = EquilibriumSystem.build(assembly, mu, density, frame, cone, sides, contacts, budget)
 
         def decide(angle: float):
             return system.feasible(tilted_gravity(axis, angle), budget)
     else:
         stable_under = decider(assembly, mu, density=density, frame=frame, cone=cone, sides=sides,
-                               contacts=contacts, **(cra_options or {}))
+                               contacts=contacts, budget=budget, **(cra_options or {}))
 
         def decide(angle: float):
             result = stable_under(tilted_gravity(axis, angle), budget)
