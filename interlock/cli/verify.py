@@ -61,6 +61,7 @@ def run(args) -> int:
     started = command_started(args)
     time_limit(args.time_limit, started)
     from interlock.verify import check
+    from interlock.verify.budget import Budget
 
     from tqdm import tqdm
 
@@ -74,7 +75,8 @@ def run(args) -> int:
             bar.set_description(f"verify: {stage}")
             bar.update(1)
 
-        limit = {} if args.time_limit is None else {"time_limit": time_limit(args.time_limit, started)}
+        # one budget from the command's start, so that "time_limit = ..." is what the user asked for
+        limit = {} if args.time_limit is None else {"time_limit": Budget(float(args.time_limit), started)}
         verdict = check(assembly, translational=args.translational, certify=args.certify, progress=announce,
                         order=args.order, **limit)
     write_html(args, assembly, verdict)

@@ -150,7 +150,7 @@ class Verdict:
 def check(assembly: Assembly, frame=None, translational: bool = False, certify: bool = False, *,
           rank_rtol: float = RANK_RTOL, lp_tol: float = LP_TOL, contacts=None, validate: bool = True,
           progress=None, lp_solver: str = "clarabel", order: int = 1, tolerance: float | None = None,
-          time_limit: float | None = None) -> Verdict:
+          time_limit: float | Budget | None = None) -> Verdict:
     """Decide whether the assembly is infinitesimally interlocked with the given frame.
 
     The assembly is infinitesimally interlocked (Def. 3.3) iff ``{x : A x >= 0} = {0}``
@@ -212,7 +212,9 @@ def check(assembly: Assembly, frame=None, translational: bool = False, certify: 
         this one budget (:mod:`interlock.verify.budget`): the solvers get the
         time left, and when it is spent the answer is None, "inconclusive:
         time limit reached in <stage>".  The limit never changes which route
-        is taken, only whether an answer arrives.
+        is taken, only whether an answer arrives.  A
+        :class:`~interlock.verify.budget.Budget` started earlier (the
+        command line's, from the command's start) is used as it is.
 
     Notes
     -----
@@ -237,7 +239,7 @@ def check(assembly: Assembly, frame=None, translational: bool = False, certify: 
     (False, 5, (4,), [0.0, 0.0, 0.0, 0.0, 0.0, 1.0])
     """
     _check_arguments(assembly, lp_solver, order, rank_rtol, lp_tol, tolerance, contacts)
-    budget = Budget.start(time_limit)
+    budget = time_limit if isinstance(time_limit, Budget) else Budget.start(time_limit)
     timings = {}
     try:
         return _decide(assembly, frame, translational, certify, rank_rtol, lp_tol, contacts, validate, progress,
@@ -282,6 +284,8 @@ def _decide(assembly, frame, translational, certify, rank_rtol, lp_tol, contacts
     """The body of :func:`check` after its arguments were checked; raises TimeLimitReached when ``budget`` is spent."""
     kinds, contacts = (contacts, None) if isinstance(contacts, str) else ("all", contacts)  # the contact model
     precision = block_precision(assembly)
+    if tolerance is not None:  # the caller's word on how exact the faces are: the search and the overlaps use it too
+        precision = precision.widened(tolerance)
     distance = search_distances(assembly, precision)
     coarse = too_coarse(assembly, frame, precision)
     if coarse is not None:

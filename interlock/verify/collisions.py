@@ -83,7 +83,7 @@ class MotionOverlaps:
         return worst[0], worst[1], worst[2], apart
 
     def _penetration(self, i: int, j: int, transforms, common) -> float:
-        from interlock.verify.validate import _penetration
+        from interlock.verify.validate import penetration
 
         a = self.assembly
         meshes = []
@@ -91,7 +91,7 @@ class MotionOverlaps:
             mesh = a.meshes[a.types[b]]
             meshes.append(type(mesh)(mesh.vertices @ transforms[b, :3, :3].T + transforms[b, :3, 3], mesh.faces,
                                      process=False))
-        return _penetration(meshes[0], meshes[1], common)
+        return penetration(meshes[0], meshes[1], common)
 
     def _fixed(self, b):
         if b not in self.fixed_solids:

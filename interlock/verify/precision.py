@@ -20,6 +20,8 @@ precision.
 
 from __future__ import annotations
 
+import dataclasses
+
 import math
 from dataclasses import dataclass
 
@@ -78,6 +80,20 @@ class Precision:
         """
         delta = self.delta if not read or self.read is None else self.read
         return PRECISION_FACTOR * 0.5 * float(delta[i] + delta[j])
+
+    def widened(self, tolerance: float) -> "Precision":
+        """The precision of blocks whose faces the caller says are only within ``tolerance`` of the model: each
+        rounding at least ``tolerance / PRECISION_FACTOR`` (so a contact's tolerance is at least ``tolerance``),
+        its source "given tolerance" where that is coarser than the numbers.
+
+        >>> Precision(np.array([1e-9, 1e-3]), ("float32", "4 significant digits")).widened(4e-6).source
+        ('given tolerance', '4 significant digits')
+        """
+        floor = float(tolerance) / PRECISION_FACTOR
+        coarser = np.asarray(self.delta, dtype=float) < floor
+        read = None if self.read is None else np.maximum(self.read, floor)
+        source = tuple("given tolerance" if c else s for c, s in zip(coarser, self.source))
+        return dataclasses.replace(self, delta=np.maximum(self.delta, floor), source=source, read=read)
 
     def describe(self, blocks=None) -> str:
         """The sources of the given blocks (default all), most common first, e.g. ``"float32 input"``."""

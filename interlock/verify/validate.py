@@ -300,7 +300,7 @@ def validate(assembly: Assembly, rtol: float = OVERLAP_RTOL, depth=None) -> list
     return every
 
 
-def penetration(first, second) -> float:
+def penetration(first, second, common=None) -> float:
     """How deep the surface of either of two solids reaches inside the other (both in one frame).
 
     The largest ``s1(p) + s2(p)`` over points ``p``, where ``s`` is the
@@ -316,6 +316,9 @@ def penetration(first, second) -> float:
     ----------
     first, second : trimesh.Trimesh
         Closed, consistently oriented meshes.
+    common : manifold3d.Manifold, optional
+        Their common solid, when the caller has it already (a finite motion's
+        overlap test); computed otherwise.
 
     Returns
     -------
@@ -345,9 +348,10 @@ def penetration(first, second) -> float:
     >>> penetration(cube, trimesh.creation.box(bounds=[[1, 0, 0], [2, 1, 1]])) < 1e-12  # touching
     True
     """
-    import manifold3d
+    if common is None:
+        import manifold3d
 
-    common = manifold_solid(manifold3d, first, 0) ^ manifold_solid(manifold3d, second, 1)
+        common = manifold_solid(manifold3d, first, 0) ^ manifold_solid(manifold3d, second, 1)
     return _penetration(first, second, common)
 
 

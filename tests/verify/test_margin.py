@@ -421,3 +421,19 @@ def test_finite_motion_lets_blocks_interfere_only_as_deep_as_allowed():
         finite_motion(slot, lift, depth=-1.0)
     with pytest.raises(MotionError, match="depth must be"):
         finite_motion(slot, lift, depth=[1e-5, 1e-5])
+
+
+def test_a_given_tolerance_widens_the_search_and_the_overlaps_too():
+    """A GeoCombSurfX patch with vertex noise of 1e-5 of its size overlaps by more than its float64 numbers allow
+    and is refused; told that its faces are only within 1e-4, the search and the overlap test use that, and the
+    patch is interlocked as its original (frame: blocks 1-8), the tolerance stated as given."""
+    from benchmarks.real_files import perturbed
+    from interlock.verify.validate import OverlapError
+
+    noisy = perturbed("GeoComb [-05,05]", 1, "noise 1e-5")
+    frame = list(range(1, 9))
+    with pytest.raises(OverlapError, match="overlap"):
+        check(noisy, frame=frame)
+    verdict = check(noisy, frame=frame, tolerance=1e-4)
+    assert verdict.interlocked is True and verdict.margin.lower > 1
+    assert verdict.tolerances["tolerance_from"] == "given" and "(given)" in str(verdict)
