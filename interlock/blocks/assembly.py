@@ -7,15 +7,17 @@ import sys
 import warnings
 from collections.abc import Sequence
 from functools import cached_property
+from typing import TYPE_CHECKING
 
-import networkx as nx
 import numpy as np
-import shapely
 import trimesh
 
 from interlock import deprecation
 from interlock.blocks.repair import TJUNCTION_RTOL, consistently_wound, split_t_junctions, unmatched_edges
 from interlock.errors import AssemblyError
+
+if TYPE_CHECKING:  # networkx and shapely load where a graph or a ring is built
+    import networkx as nx
 
 __all__ = ["Assembly", "AssemblyError", "load_compas", "load_3dm", "NEIGHBOUR_RTOL", "RIGID_TOL", "KIND_DECIMALS",
            "MAX_COORDINATE"]
@@ -191,7 +193,7 @@ class Assembly:
 
     # --- neighbourhood -----------------------------------------------------------
     @cached_property
-    def neighbours(self) -> nx.Graph:
+    def neighbours(self) -> "nx.Graph":
         """Candidate contacts: blocks whose bounding boxes touch (``NEIGHBOUR_RTOL``).
 
         Each box is padded by ``NEIGHBOUR_RTOL`` times its own size and largest
@@ -210,11 +212,14 @@ class Assembly:
         """Per block, ``rtol`` times its size plus its largest coordinate: a distance within its own precision."""
         return rtol * (self.block_sizes + np.abs(self.bounds).max(axis=(1, 2)))
 
-    def neighbour_graph(self, rtol: float = NEIGHBOUR_RTOL, pad=None) -> nx.Graph:
+    def neighbour_graph(self, rtol: float = NEIGHBOUR_RTOL, pad=None) -> "nx.Graph":
         """:attr:`neighbours` with another tolerance: ``rtol`` relative to :attr:`scale`, or ``pad`` per block.
 
         ``pad`` (a length, or one per block) widens each block's box by that much.
         """
+        import networkx as nx
+        import shapely
+
         graph = nx.Graph()
         fixed = set(self.frame)
         for i in range(len(self)):
@@ -246,6 +251,8 @@ class Assembly:
             return self._boundary
         if len(self) < 3:
             return tuple(range(len(self)))
+        import shapely
+
         meshes = self.world_meshes()
         points = np.vstack([m.vertices for m in meshes])
         if self.lattice is not None:
