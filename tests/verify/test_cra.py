@@ -15,7 +15,7 @@ from interlock.blocks import Assembly
 from interlock.errors import InterlockError
 from interlock.verify import contacts
 from interlock.verify.statics import cra
-from interlock.verify.statics import critical_tilt, rbe, tilted_gravity
+from interlock.verify.statics import critical_tilt, rbe, tilt_scan, tilted_gravity
 from interlock.verify.statics.equilibrium import EquilibriumSystem
 from tests.verify.test_stability import TABLE_2_TOL, _stack
 
@@ -319,14 +319,20 @@ TABLE_2_DIFFERS = {("type-a", "xy30", 0.84): 66.6}
 @pytest.mark.parametrize("mu", [0.20, 0.84])
 @pytest.mark.parametrize("model, axis", list(TABLE_2_CRA))
 def test_table_2_cra_critical_tilt(reference_data, model, axis, mu):
+    # The scan bisects until its bracket is a third of the tolerance, not critical_tilt's 0.1 deg (the finest
+    # steps sit on the boundary, where CRA's MILP runs to its node limit: up to 20 s an angle), and the whole
+    # bracket, which holds the critical angle, must lie within the tolerance of the paper's angle (before: its
+    # upper end); where we differ from the paper, the scan goes down to critical_tilt's default 0.1 deg.
     paper = TABLE_2_CRA[model, axis][0 if mu == 0.20 else 1]
     assembly, found = _model(reference_data, model)
-    ours = critical_tilt(assembly, axis, mu, method="cra", contacts=found)
     if (model, axis, mu) in TABLE_2_DIFFERS:
+        ours = critical_tilt(assembly, axis, mu, method="cra", contacts=found)
         assert ours == pytest.approx(TABLE_2_DIFFERS[model, axis, mu], abs=0.3)
         assert ours > paper + TABLE_2_TOL[mu]
     else:
-        assert ours == pytest.approx(paper, abs=TABLE_2_TOL[mu])
+        scan = tilt_scan(assembly, axis, mu, method="cra", contacts=found, tol=TABLE_2_TOL[mu] / 3)
+        assert scan.angle - scan.stable_below <= TABLE_2_TOL[mu] / 3
+        assert paper - TABLE_2_TOL[mu] <= scan.stable_below < scan.angle <= paper + TABLE_2_TOL[mu], scan
 
 
 def test_type_a_about_xy30_twists_and_holds_beyond_the_paper(reference_data):

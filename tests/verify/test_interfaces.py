@@ -211,7 +211,8 @@ def stored_certificate():
     from interlock.blocks.contact import Contact
     from tests.conftest import REFERENCE_DATA
 
-    data = np.load(CERTIFICATE)
+    with np.load(CERTIFICATE) as stored_arrays:  # read each array once: an NpzFile decompresses on every lookup
+        data = {name: stored_arrays[name] for name in stored_arrays.files}
     assembly = load_compas(REFERENCE_DATA / "compas_cra" / "armadillo.json")
     ends = np.cumsum(data["counts"])
     stored = []
