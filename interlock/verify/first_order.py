@@ -295,7 +295,7 @@ def rigid_cluster_motion(A, clusters, eps: np.ndarray, budget: Budget | None = N
     least, in tolerances, for what it opens; accepted when ``delta <= |y|_inf``.  Translations first (a part slides
     out), then twists.  Rows within a cluster are
     zero in ``A E``: the motion a rounded file allows only by sliding its blocks into each other does not count.
-    None when no rigid motion opens a contact (the LP's value is at most ``eps``'s order) or the solver fails.
+    None when no rigid motion opens a contact within the tolerances, or the solver fails.
 
     Examples
     --------
@@ -312,7 +312,7 @@ def rigid_cluster_motion(A, clusters, eps: np.ndarray, budget: Budget | None = N
     >>> bool(np.allclose(twists[0], twists[1])), bool(np.all(twists[:, :3] == 0)), bool(twists[0, 5] > 0)
     (True, True, True)
     """
-    if A.translational:
+    if A.translational or not len(clusters):
         return None
     column_of = {int(b): k for k, b in enumerate(A.free)}
     rows, cols, vals = [], [], []
@@ -325,8 +325,6 @@ def rigid_cluster_motion(A, clusters, eps: np.ndarray, budget: Budget | None = N
             block = np.block([[np.eye(3), np.zeros((3, 3))], [-cross, np.eye(3)]])
             r, c = np.nonzero(block)
             rows.extend(6 * g + r), cols.extend(6 * k + c), vals.extend(block[r, c])
-    if not clusters:
-        return None
     E = sp.csr_matrix((vals, (rows, cols)), shape=(A.shape[1], 6 * len(clusters)))
     B = (A.matrix @ E).tocsr()
     scale = np.abs(B).max(axis=1).toarray().ravel()
@@ -339,19 +337,19 @@ def rigid_cluster_motion(A, clusters, eps: np.ndarray, budget: Budget | None = N
     for allowed in (~turning, np.ones_like(turning)):  # a translation first: the way a part slides out
         # unknowns (y, delta): min delta subject to B y + delta eps >= 0 and 1^T B y = 1 (homogeneous: the
         # direction that closes the least, in tolerances, for the contact it opens)
-        k = int(allowed.sum())
+        unknowns = int(allowed.sum())
         options = {} if budget is None or budget.solver_limit() is None else {"time_limit": budget.solver_limit()}
-        result = scipy.optimize.linprog(np.r_[np.zeros(k), 1.0], A_ub=-sp.hstack([B[:, allowed], eps[:, None]]),
+        result = scipy.optimize.linprog(np.r_[np.zeros(unknowns), 1.0], A_ub=-sp.hstack([B[:, allowed], eps[:, None]]),
                                         b_ub=np.zeros(B.shape[0]), A_eq=np.r_[opening[allowed], 0.0][None],
-                                        b_eq=[1.0], bounds=[(None, None)] * k + [(0, None)], method="highs",
+                                        b_eq=[1.0], bounds=[(None, None)] * unknowns + [(0, None)], method="highs",
                                         options=options)
         if budget is not None:
             budget.check("motion")
         if result.status != 0 or result.x is None:
             continue
         y = np.zeros(B.shape[1])
-        y[allowed] = result.x[:k]
+        y[allowed] = result.x[:unknowns]
         size = float(np.abs(y).max(initial=0.0))
-        if size > 0 and result.x[k] <= size:  # closes no row by more than its tolerance per unit of motion
+        if size > 0 and result.x[unknowns] <= size:  # closes no row by more than its tolerance per unit of motion
             return E @ (y / size)
     return None
