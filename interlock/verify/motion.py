@@ -399,7 +399,7 @@ def finite_motion(assembly: Assembly, motion, *, frame=None, span=None, overlap_
     message = _message(shown, moving, collision, d_list, v_list, f_list, ending, size, overlap_rtol, len(rows))
     if shown and measure.deepest > 0:
         message += (f", the blocks reaching at most {measure.deepest:.2g} into each other (within the input's "
-                    f"precision, {float(depth.max(initial=0.0)):.2g} a block)")
+                    f"precision, {tolerances['depth']:.2g} a block)")
     return FiniteMotion(shown, path.kind, moving, fixed, tuple(map(float, s_list)), tuple(map(float, d_list)),
                         tuple(map(float, v_list)), tuple(map(float, f_list)), p_list, collision, separated, ending,
                         float(path.start), float(size), float(reach), message, tolerances,

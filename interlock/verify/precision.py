@@ -20,10 +20,8 @@ precision.
 
 from __future__ import annotations
 
-import dataclasses
-
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -93,7 +91,7 @@ class Precision:
         coarser = np.asarray(self.delta, dtype=float) < floor
         read = None if self.read is None else np.maximum(self.read, floor)
         source = tuple("given tolerance" if c else s for c, s in zip(coarser, self.source))
-        return dataclasses.replace(self, delta=np.maximum(self.delta, floor), source=source, read=read)
+        return replace(self, delta=np.maximum(self.delta, floor), source=source, read=read)
 
     def describe(self, blocks=None) -> str:
         """The sources of the given blocks (default all), most common first, e.g. ``"float32 input"``."""
