@@ -197,9 +197,10 @@ def check(assembly: Assembly, frame=None, translational: bool = False, certify: 
         it (docs/interlocking.md, "Margin and tolerance").  Default: what the
         coordinates' rounding implies (:func:`~interlock.verify.margin.rounding_tolerance`;
         float32 files: about 2e-7 of the largest coordinate).  Where some
-        motion keeps every contact within it, the answer is False ("not
-        interlocked within tolerance", with the motion); where neither is
-        shown, None with the margin's bounds.
+        motion keeps every contact within it, that motion is followed for
+        real: False ("not interlocked (finite motion shown)") when the blocks
+        come apart, else None (the motion and the precision are comparable);
+        where neither bound decides, None with the margin's bounds.
     order : {1, 2}
         1: the first-order verdict above.  2: a verdict that is not
         "interlocked" is taken further (:func:`beyond_first_order`): blocked at
@@ -479,10 +480,9 @@ def _shown_finitely(assembly: Assembly, verdict: Verdict, depths: np.ndarray, es
     than the input's precision (``depths``: :func:`~interlock.verify.tolerances.block_depths`, the rounding and noise
     of each block, never a face's bend).  Then the answer is the plain "not interlocked (finite motion shown)".  A
     rounded file tilts the faces a part slides along by its rounding, so the part comes out only through
-    interference of that size.  A collision leaves the verdict as it was, except for a motion that only an
-    inexact LP point gave (:func:`_within_tolerance`): that one is then inconclusive.  (A slide across a designed
-    fold stays "within tolerance": a fold of 1e-7 blocks a unit block for real, yet overlaps it by less than
-    :data:`~interlock.verify.motion.OVERLAP_RTOL` of its volume, and its bend is no precision.)
+    interference of that size.  Otherwise the motion collides, and the answer is None: the motion and the
+    input's precision are comparable, and the file does not say whether its blocks interlock.  (The depths hold no
+    face's bend: a designed fold of 1e-7 blocks a unit block for real.)
     """
     from interlock.verify.motion import finite_motion
 
@@ -496,12 +496,11 @@ def _shown_finitely(assembly: Assembly, verdict: Verdict, depths: np.ndarray, es
                 return dataclasses.replace(verdict, interlocked=False, finite_motion=tried, motion=motion,
                                            moving=tried.moving,
                                            status=f"{tried.message}; first order: {verdict.status}")
-    if not shown.shown and verdict.tolerances.get("motion_from") == "interior point":
-        # no exact motion and none shown for real: a motion within tolerance of an inexact LP point is too little
-        return dataclasses.replace(verdict, interlocked=None, finite_motion=shown, status=(
-            f"{verdict.status}; followed for real, it collides ({shown.message})"))
     if not shown.shown:
-        return verdict
+        # a motion within the input's precision that no real motion confirms: the margin and the precision are
+        # comparable, and the file does not tell whether its blocks are interlocked
+        return dataclasses.replace(verdict, interlocked=None, finite_motion=shown, status=(
+            f"within the input's precision: {verdict.status}; followed for real, it collides ({shown.message})"))
     return dataclasses.replace(verdict, interlocked=False, finite_motion=shown,
                                status=f"{shown.message}; first order: {verdict.status}")
 
