@@ -21,8 +21,9 @@ and tolerance"):
   verdict is "not interlocked within tolerance".
 
 :func:`~interlock.verify.load_paths.load_path_bound` proves a lower bound on
-``rho`` from load paths built block by block (the bound :func:`assess` uses);
-:func:`margin_lower_bound` proves a weaker one from one positive self-stress;
+``rho`` from load paths built block by block; :func:`margin_lower_bound`
+proves a weaker one from one positive self-stress, cheaper on small
+assemblies (:func:`assess` tries the cheaper one first);
 :func:`tolerant_motion` and :func:`coordinate_motion` find motions within the
 tolerance, upper bounds.
 """
@@ -44,7 +45,7 @@ from interlock.verify.load_paths import LOAD_PATH_PASSES, load_path_bound
 __all__ = ["Margin", "MarginError", "assess", "rounding_tolerance", "input_precision", "row_tolerances",
            "margin_lower_bound", "one_stress_bounds", "tolerant_motion", "coordinate_motion",
            "GRID_BITS", "DECIMAL_MIN_RTOL", "DECIMAL_MAX_RTOL", "DECIMAL_FULL_SHARE", "PRECISION_FACTOR",
-           "MARGIN_CHUNK", "ONE_STRESS_COLUMNS", "EXACT_RTOL", "TOLERANT_SHARE", "BEND_FACTOR", "MOTION_TIME_LIMIT"]
+           "MARGIN_CHUNK", "ONE_STRESS_COLUMNS", "ONE_STRESS_WORK", "ONE_STRESS_FIRST", "ONE_STRESS_PROBE", "EXACT_RTOL", "TOLERANT_SHARE", "BEND_FACTOR", "MOTION_TIME_LIMIT"]
 
 #: Coordinates that are all multiples of a power of two with at most this many significant bits lie on a
 #: grid (voxel puzzles, generated lattices): they are taken as exact, whatever type they were stored in.
@@ -65,6 +66,19 @@ BEND_FACTOR = 2.0
 #: them (its cost grows as those coordinates times the fill of ``A^T A``'s factor; under the call's budget).  The
 #: p4 patch of radius 12 rounded to float32 (10,590 coordinates, no load-path proof) needs all of them: 14 s.
 ONE_STRESS_COLUMNS = 20000
+#: :func:`assess` tries the one-stress bound *before* the load paths where it is likely to prove and cheap enough.
+#: Its work is ``n`` solves with the factor of ``A^T A`` (``fill`` entries); one load-path pass entry (a nonzero of
+#: ``A``) costs about as much as ``1 / ONE_STRESS_WORK`` column-times-fill products (measured on this project's
+#: float32 benchmarks: 5.6e-10 s per column and factor entry, 1.5e-5 s per nonzero of ``A`` for the load paths
+#: until they prove or give up), so the estimated cost ratio is ``ONE_STRESS_WORK * n * fill / nnz(A)``.
+ONE_STRESS_WORK = 3.7e-5
+#: ... it goes first when that ratio is at most this (it is 0.04 for the p4 patch of radius 2, 0.9 at radius 9,
+#: where the load paths prove nothing; 1.9 for the RhomBlock hexagon n = 20, where they prove in half the time) ...
+ONE_STRESS_FIRST = 2.0
+#: ... and when one chunk of :data:`MARGIN_CHUNK` coordinates (a fixed sample) already has bounds at most this
+#: (a margin of 4 or more on the sample: the whole set's largest bound was within 1.9 times the sample's on the
+#: float32 benchmarks).  Otherwise the load paths go first and the one-stress bound follows where they fail.
+ONE_STRESS_PROBE = 0.25
 #: Columns of ``(A^T A)^{-1}`` formed at a time by :func:`margin_lower_bound` (memory: rows x this).
 MARGIN_CHUNK = 64
 #: :func:`tolerant_motion` relaxes each row by this share of its tolerance.
@@ -193,9 +207,11 @@ def margin_lower_bound(A: sp.csr_matrix, eps: np.ndarray, stress, chunk: int = M
     full column rank; the inverse is one sparse LU, applied to ``chunk``
     coordinates at a time (cost: ``n`` solves and a dense ``m x chunk`` block
     per chunk, ``O(n m)``).  The float stress's residual ``A^T w`` is taken
-    as zero.  In :func:`assess` only for the coordinates the load paths
+    as zero.  In :func:`assess` first where it is cheap and a sample of
+    coordinates predicts a proof (:data:`ONE_STRESS_FIRST`,
+    :data:`ONE_STRESS_PROBE`), else only for the coordinates the load paths
     (:func:`~interlock.verify.load_paths.load_path_bound`, 20 to 100 times
-    tighter) leave above 1.
+    tighter, and far cheaper on large assemblies) leave above 1.
     """
     largest = float(one_stress_bounds(A, eps, stress, chunk=chunk).max(initial=0.0))
     return math.inf if largest <= 0 else 1.0 / largest
@@ -214,34 +230,54 @@ def one_stress_bounds(A: sp.csr_matrix, eps: np.ndarray, stress, columns=None, c
     >>> one_stress_bounds(A, np.array([1e-3, 2e-3]), np.ones(2)).round(6).tolist()
     [0.002]
     """
-    eps = _row_tolerances_checked(eps, A.shape[0])
-    w = np.asarray(stress, dtype=float)
-    if w.shape != (A.shape[0],) or not np.all(np.isfinite(w)) or np.any(w <= 0):
-        raise MarginError("stress must be a finite positive self-stress, one weight per row of A")
     if isinstance(chunk, bool) or not isinstance(chunk, (int, np.integer)) or chunk < 1:
         raise MarginError(f"chunk must be a positive integer, got {chunk!r}")
-    n = A.shape[1]
-    columns = np.arange(n) if columns is None else np.asarray(columns, dtype=int)
-    bounds = np.zeros(len(columns))
-    if not len(columns):
+    columns = None if columns is None else np.asarray(columns, dtype=int)
+    return _OneStress(A, eps, stress).bounds(columns, chunk=chunk, budget=budget)
+
+
+class _OneStress:
+    """The one-stress bound of :func:`one_stress_bounds` with its factor of ``A^T A`` kept: ``bounds`` for any
+    columns, ``work`` the solves it costs for all of them (columns times factor entries)."""
+
+    def __init__(self, A, eps, stress):
+        self.A = sp.csr_matrix(A, dtype=float)
+        self.eps = _row_tolerances_checked(eps, self.A.shape[0])
+        w = np.asarray(stress, dtype=float)
+        if w.shape != (self.A.shape[0],) or not np.all(np.isfinite(w)) or np.any(w <= 0):
+            raise MarginError("stress must be a finite positive self-stress, one weight per row of A")
+        self.w = w
+        self.weighted = float(self.eps @ w)
+        if not self.A.shape[1]:
+            self.lu, self.work = None, 0.0
+            return
+        # A^T A is symmetric positive definite (full column rank): minimum degree on its pattern, no pivoting
+        # (symmetric mode), fills about a third as much as COLAMD with pivots (p4 patch of radius 12 in float32:
+        # 1.69 against 3.60 million entries in L + U), and the solves dominate
+        self.lu = scipy.sparse.linalg.splu((self.A.T @ self.A).tocsc(), permc_spec="MMD_AT_PLUS_A",
+                                           diag_pivot_thresh=0.0, options={"SymmetricMode": True})
+        self.work = float(self.A.shape[1]) * float(self.lu.L.nnz + self.lu.U.nnz)
+
+    def bounds(self, columns=None, chunk: int = MARGIN_CHUNK, budget=None) -> np.ndarray:
+        A, eps, w = self.A, self.eps, self.w
+        n = A.shape[1]
+        columns = np.arange(n) if columns is None else columns
+        bounds = np.zeros(len(columns))
+        if not len(columns):
+            return bounds
+        for start in range(0, len(columns), chunk):
+            part = np.arange(start, min(start + chunk, len(columns)))
+            unit = np.zeros((n, len(part)))
+            unit[columns[part], np.arange(len(part))] = 1.0
+            u = A @ self.lu.solve(unit)  # u0 = -u for the load +e_j, u0 = u for -e_j
+            paid = eps @ u
+            ratios = u / w[:, None]
+            tau_plus = np.maximum(0.0, ratios.max(axis=0))  # makes -u + tau w >= 0
+            tau_minus = np.maximum(0.0, -ratios.min(axis=0))
+            bounds[part] = np.maximum(tau_plus * self.weighted - paid, tau_minus * self.weighted + paid)
+            if budget is not None:
+                budget.check("margin")
         return bounds
-    # A^T A is symmetric: minimum degree on its pattern fills half as much as COLAMD (p4 patch of radius 9 in
-    # float32: 0.87 against 1.68 million entries in L + U), and the solves dominate
-    lu = scipy.sparse.linalg.splu((A.T @ A).tocsc(), permc_spec="MMD_AT_PLUS_A")
-    weighted = float(eps @ w)
-    for start in range(0, len(columns), chunk):
-        part = np.arange(start, min(start + chunk, len(columns)))
-        unit = np.zeros((n, len(part)))
-        unit[columns[part], np.arange(len(part))] = 1.0
-        u = A @ lu.solve(unit)  # u0 = -u for the load +e_j, u0 = u for -e_j
-        paid = eps @ u
-        ratios = u / w[:, None]
-        tau_plus = np.maximum(0.0, ratios.max(axis=0))  # makes -u + tau w >= 0
-        tau_minus = np.maximum(0.0, -ratios.min(axis=0))
-        bounds[part] = np.maximum(tau_plus * weighted - paid, tau_minus * weighted + paid)
-        if budget is not None:
-            budget.check("margin")
-    return bounds
 
 
 def tolerant_motion(A: sp.csr_matrix, eps: np.ndarray, tol: float = 1e-9, budget=None):
@@ -404,9 +440,18 @@ def assess(matrix, contacts, scale: float, stress, tolerance, source: str, *, pe
     -------
     Margin
         Below :data:`EXACT_RTOL` of ``scale`` nothing is computed
-        (``lower = inf``).  Otherwise the load-path lower bound
+        (``lower = inf``).  Otherwise the cheaper proof first: the one-stress
+        bound (:func:`one_stress_bounds`) where its work is at most
+        :data:`ONE_STRESS_FIRST` times the load paths' (estimated,
+        :data:`ONE_STRESS_WORK`) and a sample of :data:`MARGIN_CHUNK`
+        coordinates has bounds at most :data:`ONE_STRESS_PROBE`, stopped as
+        soon as it proves a margin above 1; else, or when it does not, the
+        load-path lower bound
         (:func:`~interlock.verify.load_paths.load_path_bound`, stopped once
-        it exceeds 1); when it does not, a motion within the tolerance: the
+        it exceeds 1), each coordinate bounded by the smaller of the two (the
+        one-stress bound for those the load paths leave above 1, up to
+        :data:`ONE_STRESS_COLUMNS` columns); when that does not exceed 1, a
+        motion within the tolerance: the
         exact LP of the coordinate whose bound is largest
         (:func:`coordinate_motion`), then :func:`tolerant_motion`.  A solver
         failure is kept in ``upper_status``, never dropped.
@@ -460,18 +505,38 @@ def assess(matrix, contacts, scale: float, stress, tolerance, source: str, *, pe
         t = np.maximum(t, EXACT_RTOL * scale)
     A = matrix.matrix
     eps = row_tolerances(matrix, contacts, t)
+    n = A.shape[1]
+    stressed, first = None, None  # the one-stress bound's factor, and its bounds on every coordinate if tried first
+    if n <= ONE_STRESS_COLUMNS and stress.shape == (A.shape[0],) and np.all(stress > 0):
+        stressed = _OneStress(A, eps, stress)
+        if stressed.work * ONE_STRESS_WORK <= ONE_STRESS_FIRST * max(A.nnz, 1):
+            # cheap enough to go first: a sample of one chunk says whether it is likely to prove (small p4 patches
+            # and hexagons: 3 to 10 times faster than the load paths; p4 radius 9: the load paths prove nothing)
+            sample = np.sort(np.random.default_rng(0).permutation(n)[:MARGIN_CHUNK])
+            probed = stressed.bounds(sample, budget=budget)
+            if float(probed.max(initial=0.0)) <= ONE_STRESS_PROBE:
+                rest = np.setdiff1d(np.arange(n), sample)
+                first = np.zeros(n)
+                first[sample], first[rest] = probed, stressed.bounds(rest, budget=budget)
+                worst = float(first.max(initial=0.0))
+                if worst < 1.0:
+                    return Margin(math.inf if worst <= 0 else 1.0 / worst, math.inf, largest, source,
+                                  per_contact=bool(per_contact))
     found = load_path_bound(A, eps, matrix.block_size, passes=passes, target=1.0, budget=budget)
     lower = found.margin
-    if lower <= 1.0 and stress is not None:
+    if lower <= 1.0:
         # both bounds are proved per coordinate; where the load paths prove nothing (the TopoLite bunny's many
-        # small contacts), the one-stress bound of the float verdict may (float32 bunny, frame {0, 1}: 1.7
-        # against 0), and it is needed only for the coordinates the load paths leave above 1
-        proved = found.coordinates.max(axis=1) if len(found.coordinates) else np.zeros(A.shape[1])
+        # small contacts, p4 patches of radius 9 and 12), the one-stress bound of the float verdict may (float32
+        # bunny, frame {0, 1}: 1.7 against 0), and it is needed only for the coordinates the load paths leave above 1
+        proved = found.coordinates.max(axis=1) if len(found.coordinates) else np.zeros(n)
         open_ = np.flatnonzero(~(proved < 1.0))
-        if len(open_) <= ONE_STRESS_COLUMNS:
-            proved[open_] = np.minimum(proved[open_], one_stress_bounds(A, eps, stress, open_, budget=budget))
-            worst = float(proved.max(initial=0.0))
-            lower = max(lower, math.inf if worst <= 0 else 1.0 / worst)
+        if first is not None:
+            proved = np.minimum(proved, first)
+        elif len(open_) <= ONE_STRESS_COLUMNS:
+            stressed = stressed if stressed is not None else _OneStress(A, eps, stress)
+            proved[open_] = np.minimum(proved[open_], stressed.bounds(open_, budget=budget))
+        worst = float(proved.max(initial=0.0))
+        lower = max(lower, math.inf if worst <= 0 else 1.0 / worst)
     if lower > 1.0:
         return Margin(lower, math.inf, largest, source, per_contact=bool(per_contact))
     motion, upper, status = None, math.inf, "no motion within the tolerance found"
