@@ -31,7 +31,7 @@ from interlock.verify.margin import Margin, assess, row_tolerances
 from interlock.verify.precision import PRECISION_FACTOR, Precision, block_precision
 from interlock.verify.matrix import InterlockingMatrix, interlocking_matrix
 from interlock.verify.tolerances import (COARSE_RATIO, NOISE_CONTACTS, NOISE_SPREAD, block_depths, block_noise,
-                                        coarsest, contact_tolerances, tolerance_source, too_coarse)
+                                        coarseness, coarsest, contact_tolerances, tolerance_source, too_coarse)
 from interlock.verify.validate import refuse_overlaps_without_contact, validate as check_overlaps
 
 __all__ = ["Verdict", "check", "beyond_first_order", "block_noise", "opening_motion", "contact_tolerances",
@@ -401,12 +401,18 @@ def _decide(assembly, frame, translational, certify, rank_rtol, lp_tol, contacts
                                                    per_contact=True, budget=budget), A, len(assembly),
                                    coarsest(found, A, limits) if tolerance is None else None)
             verdict = _with_play(verdict, A, found, budget)
-    if verdict.motion is not None and verdict.motion_kind == "within tolerance":
-        # a motion the tolerances leave open: moved for real, it either shows the blocks coming apart or collides
+    rough, roughest = coarseness(assembly, frame, precision)
+    coarse = rough >= COARSE_RATIO and verdict.interlocked is False and verdict.finite_motion is None
+    if verdict.motion is not None and (verdict.motion_kind == "within tolerance" or coarse):
+        # a motion the tolerances leave open, or one that a coarse file's lost or bent contacts may have left open:
+        # moved for real, it either shows the blocks coming apart or collides
+        why = ("within the input's precision" if verdict.motion_kind == "within tolerance" else
+               f"the input's precision {rough * assembly.block_sizes[roughest]:.2g} is coarse against its blocks "
+               f"(block {roughest} is {assembly.block_sizes[roughest]:.3g} across)")
         with _stage(timings, "motion", progress, budget):
             verdict = _shown_finitely(assembly, verdict, block_depths(found, precision, len(assembly), tolerance),
                                       lambda: _rigid_escapes(A, found, limits, verdict, len(assembly), budget),
-                                      budget)
+                                      budget, why)
     if certify:
         from interlock.verify.certify import certify_verdict
 
@@ -470,8 +476,9 @@ def _rigid_escapes(A: InterlockingMatrix, found, limits, verdict: Verdict, block
 
 
 def _shown_finitely(assembly: Assembly, verdict: Verdict, depths: np.ndarray, escapes=list,
-                    budget: Budget | None = None) -> Verdict:
-    """A "not interlocked within tolerance" verdict whose motion, followed for real, moves the blocks apart.
+                    budget: Budget | None = None, why: str = "within the input's precision") -> Verdict:
+    """A "not interlocked within tolerance" verdict (or a first-order one on a coarse input, ``why`` saying so) whose
+    motion, followed for real, moves the blocks apart.
 
     The motion keeps every contact within the input's tolerance.  Followed as a finite motion
     (:func:`~interlock.verify.motion.finite_motion`), it may move the blocks apart without overlap beyond
@@ -500,7 +507,7 @@ def _shown_finitely(assembly: Assembly, verdict: Verdict, depths: np.ndarray, es
         # a motion within the input's precision that no real motion confirms: the margin and the precision are
         # comparable, and the file does not tell whether its blocks are interlocked
         return dataclasses.replace(verdict, interlocked=None, finite_motion=shown, status=(
-            f"within the input's precision: {verdict.status}; followed for real, it collides ({shown.message})"))
+            f"{why}: {verdict.status}; followed for real, it collides ({shown.message})"))
     return dataclasses.replace(verdict, interlocked=False, finite_motion=shown,
                                status=f"{shown.message}; first order: {verdict.status}")
 
@@ -613,8 +620,8 @@ def _with_margin(verdict: Verdict, margin: Margin, A: InterlockingMatrix, blocks
     """An "interlocked" verdict with its margin: kept above 1, False with a motion within tolerance, else None.
 
     ``coarsest`` (the largest tolerance of a contact against its size, and that size): where the margin does not
-    exceed 1 and the input's tolerance is at least :data:`COARSE_RATIO` of a contact's size, the answer is None,
-    saying that the file's precision is coarser than its blocks' contacts.
+    exceed 1, no motion within tolerance was found and the input's tolerance is at least :data:`COARSE_RATIO` of a
+    contact's size, the answer is None, saying that the file's precision is coarser than its blocks' contacts.
     """
     verdict = dataclasses.replace(verdict, margin=margin, tolerances={**verdict.tolerances,
                                                                       "tolerance": margin.tolerance,
@@ -623,16 +630,16 @@ def _with_margin(verdict: Verdict, margin: Margin, A: InterlockingMatrix, blocks
         if math.isinf(margin.lower):  # the tolerance is negligible: nothing to state
             return verdict
         return dataclasses.replace(verdict, status=f"{verdict.status}; {margin}")
-    if coarsest is not None and coarsest[0] >= COARSE_RATIO * coarsest[1]:
-        return dataclasses.replace(verdict, interlocked=None, status=(
-            f"the file's precision {coarsest[0]:.2g} is coarser than its blocks' contacts (one is "
-            f"{coarsest[1]:.2g} across; {margin}); the exact input is interlocked ({verdict.status})"))
-    if margin.motion is not None and margin.upper <= 1.0:
+    if margin.motion is not None and margin.upper <= 1.0:  # followed for real next: shown, or inconclusive
         motion, moving = _motion(A, margin.motion, blocks, reversible=False)
         return dataclasses.replace(
             verdict, interlocked=False, motion=motion, motion_kind="within tolerance", moving=moving,
             status=f"{moving_names(moving)} a first-order motion that keeps every contact within the tolerance "
                    f"{margin.tolerance:.3g} ({margin}); the exact input is interlocked")
+    if coarsest is not None and coarsest[0] >= COARSE_RATIO * coarsest[1]:
+        return dataclasses.replace(verdict, interlocked=None, status=(
+            f"the file's precision {coarsest[0]:.2g} is coarser than its blocks' contacts (one is "
+            f"{coarsest[1]:.2g} across; {margin}); the exact input is interlocked ({verdict.status})"))
     return dataclasses.replace(verdict, interlocked=None, status=(
         f"not conclusive within the tolerance {margin.tolerance:.3g}: {margin}; "
         f"the exact input is interlocked ({verdict.status})"))

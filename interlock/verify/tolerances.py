@@ -12,12 +12,18 @@ from interlock.blocks.assembly import Assembly
 from interlock.verify.matrix import InterlockingMatrix
 from interlock.verify.precision import PRECISION_FACTOR, Precision
 
-__all__ = ["contact_tolerances", "block_depths", "block_noise", "too_coarse", "tolerance_source", "coarsest",
-           "COARSE_RATIO", "NOISE_CONTACTS", "NOISE_SHARE", "NOISE_SPREAD"]
+__all__ = ["contact_tolerances", "block_depths", "block_noise", "coarseness", "too_coarse", "tolerance_source",
+           "coarsest", "COARSE_RATIO", "UNDECIDABLE_RATIO", "NOISE_CONTACTS", "NOISE_SHARE", "NOISE_SPREAD"]
 
-#: An input whose tolerance reaches this share of a contact's size (the square root of its area) is too coarse to
-#: decide where the margin does not: the 4-digit bunny's faces are bent by 0.0036 on contacts 0.06 across.
+#: An input whose tolerance reaches this share of a contact's or a block's size is coarse: its first-order answers
+#: stand only where something beyond first order confirms them (a margin above 1, a finite motion shown); the
+#: 4-digit bunny's faces are bent by 0.0036 on contacts 0.06 across.
 COARSE_RATIO = 0.01
+#: An input whose rounding (times the precision factor) reaches this share of a free block's size (or of a
+#: neighbour's) is not checked at all: rounding that coarse moves faces apart and lets blocks out that the design
+#: holds (the GeoCombSurfX patches written with 4 digits at coordinates up to 150, 3 % of a block: block 0 comes
+#: out of the file, not of the design), and float32 coordinates 1e6 model sizes from the origin leave no contact.
+UNDECIDABLE_RATIO = 0.02
 #: A block's noise is read (:func:`block_noise`) from at least this many contacts: fewer would take a designed
 #: fold of one or two faces for noise.
 NOISE_CONTACTS = 4
@@ -31,23 +37,30 @@ NOISE_SHARE = 2.0 / 3.0
 NOISE_SPREAD = 5.0
 
 
-def too_coarse(assembly: Assembly, frame, precision: Precision) -> str | None:
-    """Why the input is too coarse to decide, or None: a free block, or a neighbour of one, whose coordinates'
-    rounding (times :data:`~interlock.verify.precision.PRECISION_FACTOR`) reaches :data:`COARSE_RATIO` of its size.
-
-    Float32 coordinates 1e6 model sizes from the origin round a unit cube's corners by 0.25: no contact survives,
-    and any verdict would be about geometry the file does not hold.
-    """
+def coarseness(assembly: Assembly, frame, precision: Precision) -> tuple[float, int | None]:
+    """``(ratio, block)``: the largest rounding (times :data:`~interlock.verify.precision.PRECISION_FACTOR`) of a
+    free block, or of a neighbour of one, against its size, and that block (``(0.0, None)`` without free blocks)."""
     fixed = set(assembly.block_indices(assembly.frame if frame is None else frame))
     free = [b for b in range(len(assembly)) if b not in fixed]
     graph = assembly.neighbours
     near = sorted(set(free).union(*(graph[b] for b in free)))
     if not near:
-        return None
+        return 0.0, None
     near = np.asarray(near)
     ratio = PRECISION_FACTOR * precision.delta[near] / assembly.block_sizes[near]
-    worst = int(near[np.argmax(ratio)])
-    if ratio.max() < COARSE_RATIO:
+    return float(ratio.max()), int(near[np.argmax(ratio)])
+
+
+def too_coarse(assembly: Assembly, frame, precision: Precision, ratio: float = UNDECIDABLE_RATIO) -> str | None:
+    """Why the input is too coarse to decide, or None: a free block, or a neighbour of one, whose coordinates'
+    rounding (times :data:`~interlock.verify.precision.PRECISION_FACTOR`) reaches ``ratio`` of its size
+    (:func:`coarseness`).
+
+    Float32 coordinates 1e6 model sizes from the origin round a unit cube's corners by 0.06: no contact survives,
+    and any verdict would be about geometry the file does not hold.
+    """
+    largest, worst = coarseness(assembly, frame, precision)
+    if worst is None or largest < ratio:
         return None
     remedy = ("move the model near the origin or store it in float64" if "float" in precision.source[worst]
               else "write its coordinates with more digits")
