@@ -17,7 +17,7 @@ from interlock.blocks.contact import ContactError, plane_bases
 from interlock.blocks.repair import merge_vertices
 
 __all__ = ["Facets", "FacetTable", "facets", "merged", "clean_polygons", "check_tolerance", "DEFAULT_CONTACT_RTOL",
-           "DEFAULT_ANGLE_TOL", "PLANAR_ULPS", "NOISE_FACTOR", "NOISE_ANGLE", "NOISE_TAIL", "NOISE_PAIRS", "TINY"]
+           "DEFAULT_ANGLE_TOL", "PLANAR_ULPS", "NOISE_FACTOR", "NOISE_ANGLE", "NOISE_TAIL", "NOISE_PAIRS", "NOISE_BALANCE", "TINY"]
 
 #: Distance tolerance relative to the model size: two planes closer than this
 #: coincide, a gap narrower than this is a contact, an overlap thinner than this
@@ -48,8 +48,11 @@ NOISE_ANGLE = 1e-2
 #: The largest of a few thousand strays is about this many times their median (a half-normal's 99.9th
 #: percentile is 4.9 times its median).
 NOISE_TAIL = 5.0
-#: A mesh reads noise from its population of strays only with at least this many nearly coplanar pairs.
+#: A mesh reads noise from its population of strays only with at least this many nearly coplanar pairs ...
 NOISE_PAIRS = 8
+#: ... and with at least this share of them creased each way (noise is as often concave as convex; a finely
+#: tessellated sphere creases one way only).
+NOISE_BALANCE = 0.25
 
 #: Floor for tolerances of zero (relative; keeps the spatial index's metric finite).
 TINY = 1e-15
@@ -238,7 +241,8 @@ def _facets_of(meshes, atol, angle_tol: float) -> list[Facets]:
         big_first = twice_area[a] >= twice_area[b]
         big, small = np.where(big_first, a, b), np.where(big_first, b, a)
         unshared = _unshared_vertex(faces[small], faces[big])
-        far = np.abs(np.einsum("ij,ij->i", normal[big], vertices[unshared] - tri[big, 0]))
+        stray = np.einsum("ij,ij->i", normal[big], vertices[unshared] - tri[big, 0])  # > 0: a concave crease
+        far = np.abs(stray)
         same_side = np.einsum("ij,ij->i", normal[a], normal[b]) > 0
         # noise: neighbours whose normals agree within the default angle but whose far vertex strays from the plane
         nearly = same_side & (angle <= min(angle_tol, DEFAULT_ANGLE_TOL))
@@ -246,7 +250,7 @@ def _facets_of(meshes, atol, angle_tol: float) -> list[Facets]:
         np.maximum.at(noise, owner[a[nearly]], far[nearly])
         # stronger noise tilts small triangles beyond that angle: read it off the strays of the whole population
         candidates = same_side & (angle <= NOISE_ANGLE)
-        noise = np.maximum(noise, NOISE_TAIL * _median_per(owner[a[candidates]], far[candidates], len(meshes)))
+        noise = np.maximum(noise, NOISE_TAIL * _noise_per(owner[a[candidates]], stray[candidates], len(meshes)))
         atol = np.maximum(atol, NOISE_FACTOR * noise)
         keep = same_side & ((angle <= angle_tol) | (far <= atol[owner[a]]))
     n_faces = len(faces)
@@ -304,14 +308,24 @@ def _facets_of(meshes, atol, angle_tol: float) -> list[Facets]:
     return out
 
 
-def _median_per(owner: np.ndarray, values: np.ndarray, count: int) -> np.ndarray:
-    """Per owner ``0 .. count - 1``: the median of its ``values`` (the upper one of an even number), 0 for owners with
-    fewer than :data:`NOISE_PAIRS` values."""
-    order = np.lexsort((values, owner))
+def _noise_per(owner: np.ndarray, strays: np.ndarray, count: int) -> np.ndarray:
+    """Per mesh ``0 .. count - 1``: the median size of its signed ``strays`` (the lower one of an even number), where
+    they look like noise: at least :data:`NOISE_PAIRS` of them, and at least :data:`NOISE_BALANCE` of them on
+    either side.  A tessellated convex or concave surface creases one way only and reads 0.
+
+    >>> _noise_per(np.array([0] * 8 + [1] * 8), np.array([1, -2, 3, -4, 5, -6, 7, -8] + [-1.0] * 8), 2).tolist()
+    [4.0, 0.0]
+    """
     sizes = np.bincount(owner, minlength=count)
+    above = np.bincount(owner, weights=strays > 0, minlength=count)
+    below = np.bincount(owner, weights=strays < 0, minlength=count)
+    values = np.abs(strays)
+    order = np.lexsort((values, owner))
     starts = np.r_[0, np.cumsum(sizes)[:-1]]
-    middle = np.minimum(starts + sizes // 2, max(len(values) - 1, 0))
-    return np.where(sizes >= NOISE_PAIRS, values[order][middle] if len(values) else 0.0, 0.0)
+    middle = np.minimum(starts + np.maximum(sizes - 1, 0) // 2, max(len(values) - 1, 0))
+    median = values[order][middle] if len(values) else np.zeros(count)
+    balanced = np.minimum(above, below) >= NOISE_BALANCE * np.maximum(sizes, 1)
+    return np.where((sizes >= NOISE_PAIRS) & balanced, median, 0.0)
 
 
 def _unions(pieces: np.ndarray, group: np.ndarray, count: int) -> np.ndarray:

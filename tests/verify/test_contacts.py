@@ -218,6 +218,30 @@ def test_face_bent_within_tolerance_is_one_facet_marked_not_planar():
     assert all(c.planar and c.deviation == 0 for c in contacts(grid_3x3()))
 
 
+
+@pytest.mark.parametrize("amplitude", [1e-5, 1e-4])
+def test_vertex_noise_beyond_the_angle_tolerance_is_read_off_the_mesh(amplitude):
+    """A unit cube cut into 768 triangles with Gaussian vertex noise (its triangles, 0.125 across, tilt by up to
+    ~50 times the noise, far beyond DEFAULT_ANGLE_TOL) has six faces, grouped within several times the noise, and
+    two such cubes side by side touch in one contact of the whole face."""
+    rng = np.random.default_rng(5)
+    fine = trimesh.creation.box().subdivide().subdivide().subdivide()
+    noisy = [trimesh.Trimesh(fine.vertices + offset + rng.normal(scale=amplitude, size=fine.vertices.shape),
+                             fine.faces) for offset in ([0, 0, 0], [1, 0, 0])]
+    faces = facets(noisy[0])
+    assert len(faces) == 6 and 3 * amplitude < faces.grouping < 100 * amplitude
+    (c,) = contacts(Assembly.from_meshes(noisy))
+    assert c.area == pytest.approx(1.0, abs=1e-3)
+
+
+def test_a_tessellated_sphere_or_a_fold_reads_no_noise():
+    """Creases of a designed surface are not noise: a sphere of 81,920 triangles creases by ~0.009 rad, all one
+    way (noise creases both ways), and a fold is one crease among coplanar pairs."""
+    mesh = trimesh.creation.icosphere(subdivisions=6)
+    sphere = facets(mesh)  # grouped within the default tolerance only
+    assert len(sphere) == 81920 and sphere.grouping == pytest.approx(DEFAULT_CONTACT_RTOL * mesh.scale)
+    folded = folded_pair(1e-3).meshes[0]
+    assert facets(folded).grouping == pytest.approx(DEFAULT_CONTACT_RTOL * folded.scale)
 def test_bad_input():
     with pytest.raises(ContactError, match="Assembly"):
         contacts([cube(0, 0), cube(1, 0)])
