@@ -224,7 +224,9 @@ def validate(assembly: Assembly, rtol: float = OVERLAP_RTOL, depth=None) -> list
         each other and still touch (the input's precision, a contact
         tolerance).  One length for every pair, or one per block, and then a
         pair may reach the sum of its two blocks' (each surface may lie its
-        own length from where it should).  Every pair whose common volume
+        own length from where it should), and a block's triangles may cross
+        each other by its own share (a rounded file folds a sliver through
+        its neighbour by its rounding).  Every pair whose common volume
         exceeds ``rtol`` or whose mean depth (``Overlap.thickness``) exceeds
         its length is then measured by :func:`penetration`, and a volume
         above ``rtol`` is refused only when that depth exceeds the length: a
@@ -271,11 +273,18 @@ def validate(assembly: Assembly, rtol: float = OVERLAP_RTOL, depth=None) -> list
                             f"{MAX_COORDINATE:g} volumes and overlaps overflow float64; give the model in other units "
                             "(scale it down) or nearer the origin")
     for k, mesh in enumerate(assembly.meshes):
-        crossing = self_intersections(mesh)
+        block = int(np.flatnonzero(assembly.types == k)[0]) if (assembly.types == k).any() else k
+        # a rounded file may fold a sliver of a block through a neighbouring triangle by its rounding: that deep
+        # (the block's own share of what a pair may reach), a crossing is the file's, not the solid's
+        own = 0.5 * allowed(block, block) if allowed is not None and block < len(assembly) else 0.0
+        size = float(np.linalg.norm(np.ptp(np.asarray(mesh.vertices, dtype=float), axis=0))) if len(mesh.vertices) \
+            else 0.0
+        crossing = self_intersections(mesh, max(CROSSING_RTOL, own / size) if size > 0 else CROSSING_RTOL)
         if len(crossing):
-            block = int(np.flatnonzero(assembly.types == k)[0]) if (assembly.types == k).any() else k
+            beyond = f" by more than {own:.3g}" if own > CROSSING_RTOL * size else ""
             raise OverlapError(f"block {block} ({assembly.labels[block]}) intersects itself: {len(crossing)} pairs of "
-                               f"its triangles cross (e.g. faces {crossing[0].tolist()}); blocks must be simple solids")
+                               f"its triangles cross{beyond} (e.g. faces {crossing[0].tolist()}); blocks must be "
+                               f"simple solids")
     every = pair_overlaps(assembly)
     if allowed is not None:
         every = _measured(assembly, every, rtol, allowed)

@@ -256,3 +256,20 @@ def test_a_mirrored_neighbour_is_measured_in_its_own_frame(offset):
     if offset:
         with pytest.raises(OverlapError, match="reaches 0.001 inside the other"):
             module.validate(pair, depth=5e-4)
+
+
+def test_a_crossing_within_the_rounding_is_the_files_not_the_solids():
+    """TopoLite's SphereA80 shell written with 6 significant digits (coordinates up to 27 cut to 1e-3): block 14's
+    slivers fold through a neighbouring triangle by up to 7e-4, within the rounding of 5e-4 per coordinate.  Without a
+    depth that is a self-intersection; with the input's precision as depth it passes, and the shell is decided as
+    its original (not interlocked)."""
+    from benchmarks.real_files import perturbed
+    from interlock import check
+
+    rounded = perturbed("TI SphereA80_Hex_T40.0", 0, "6 digits")
+    with pytest.raises(OverlapError, match="block 14 .* intersects itself"):
+        module.validate(rounded)
+    with pytest.raises(OverlapError, match="cross by more than 5e-05"):
+        module.validate(rounded, depth=1e-4)
+    assert module.validate(rounded, depth=2e-3) is not None  # a pair may reach 2e-3, a block 1e-3 into itself
+    assert check(rounded).interlocked is False
