@@ -49,8 +49,9 @@ Perturbation ``p`` (a length): float32 rounding ``2^-24 max|x|``, half the last
 printed digit of ``max|x|``, the noise amplitude, and for re-triangulation
 and float64 the float64 rounding ``2^-53 max|x|``.  The original's *reach*
 (a length) is, for an interlocked original, its margin ``rho`` times the
-tolerance (``check(..., tolerance=t)``, with ``t`` = 1e-6 of the model size:
-how far contact vertices may move and the answer stand); for one that is not,
+tolerance ``t`` = 1e-6 of the model size (how far contact vertices may move
+and the answer stand; ``rho`` from the per-coordinate LPs, :func:`exact_margin`,
+not the lower bound ``check`` proves, which stops once it exceeds 1); for one that is not,
 how far its motion moves the blocks before they collide
 (:func:`interlock.verify.motion.finite_motion` along the reported motion: the
 largest vertex displacement of the steps before the first overlap; it stops
@@ -88,6 +89,7 @@ from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
+import scipy.optimize
 import trimesh
 from scipy.spatial.transform import Rotation
 
@@ -96,6 +98,9 @@ import interlock
 from interlock.blocks import Assembly
 from interlock.errors import InterlockError
 from interlock.verify import check
+from interlock.verify.contacts import model_contacts
+from interlock.verify.margin import row_tolerances
+from interlock.verify.matrix import interlocking_matrix
 from interlock.verify.motion import OVERLAP_RTOL, finite_motion
 
 #: The peer data beside the project (``../shared/data``).
@@ -323,8 +328,11 @@ def _reach(assembly: Assembly, frame, verdict) -> tuple[float | None, float | No
             measured = check(assembly, frame=frame, tolerance=t, time_limit=TIME_LIMIT)
             if measured.margin is None:
                 return None, None, f"no margin ({measured.status})"
-            return (float(measured.margin.lower) * t, float(measured.margin.upper) * t,
-                    f"margin x tolerance ({measured.margin})")
+            # the margin itself, not a proof's lower bound (which stops once it proves 1): the band must not
+            # shrink with a looser proof
+            rho = exact_margin(assembly, frame, t)
+            return (rho * t, float(measured.margin.upper) * t,
+                    f"exact margin {rho:.3g} x tolerance (check: {measured.margin})")
         if verdict.interlocked is False and verdict.motion is not None:
             moved = finite_motion(assembly, verdict.motion, frame=frame)
             clear = 0.0
@@ -336,6 +344,24 @@ def _reach(assembly: Assembly, frame, verdict) -> tuple[float | None, float | No
     except InterlockError as error:
         return None, None, f"refused: {type(error).__name__}: {error}"
     return None, None, "undecided original"
+
+
+def exact_margin(assembly: Assembly, frame, tolerance: float) -> float:
+    """The margin ``rho = 1 / max_j max {|x_j| : A x >= -eps}`` of ``assembly`` against one ``tolerance`` (a length):
+    two HiGHS LPs per column of its interlocking matrix (:func:`~interlock.verify.margin.row_tolerances`), each
+    within the unit box (a coordinate that reaches the box gives ``rho <= 1``)."""
+    A = interlocking_matrix(assembly, frame, contacts=(found := model_contacts(assembly)))
+    eps = row_tolerances(A, found, tolerance)
+    largest = 0.0
+    for j in range(A.shape[1]):
+        for sign in (1.0, -1.0):
+            c = np.zeros(A.shape[1])
+            c[j] = -sign
+            result = scipy.optimize.linprog(c, A_ub=-A.matrix, b_ub=eps, bounds=(-1.0, 1.0), method="highs")
+            if result.status != 0:
+                raise RuntimeError(f"the margin LP of column {j} failed: {result.message}")
+            largest = max(largest, -result.fun)
+    return 1.0 / largest if largest > 0 else math.inf
 
 
 def _decide(assembly: Assembly, frame) -> dict:
