@@ -58,8 +58,22 @@ pair's mean row as a load of its own slows the growth only from 2.3 to
 that (:data:`LOAD_PATH_DIVERGENCE`).
 
 Floating point: the 6 x 6 systems are solved in floats; each value is
-inflated by :data:`LOAD_PATH_SAFETY` and negative rounding residues of the
-forces are dropped, which the inflation covers.  The local LPs are solved by
+inflated by :data:`LOAD_PATH_SAFETY` (the rounding of its few products and
+sums) and negative rounding residues of the forces are dropped.  What the
+forces then miss of their load is counted, not assumed away: each local
+solution's residual ``|sum_r f_r a_r^g + l|_1`` (real rows only: a slack
+left in the basis counts as residual) is computed and rounded up
+(:data:`LOAD_PATH_ROUNDING`).  A policy's certificates then miss at most
+``kappa gamma_i`` with ``kappa = max_i residual_i / c_i`` (the misses obey
+the recursion of the costs with ``c`` replaced by the residuals), a unit
+load's at most ``delta = residual + kappa V``, and an exact regional LP's
+at most its residual plus ``kappa`` times its cost.  A load missed by
+``s`` gives ``+-x_j <= V + |s|_1 ||x||_inf`` on ``P``, so over all
+coordinates ``||x||_inf <= X = max V / (1 - max delta)`` and each
+``V + delta X`` is proved (:func:`closed_bounds`; nothing where
+``max delta >= 1``).  The supersolution inequality is checked with a
+margin of :data:`LOAD_PATH_ROUNDING` of the values, above the rounding of
+its sums of at most seven terms.  The local LPs are solved by
 a revised primal simplex vectorised over all loads of a layer (numpy, 6 x 6
 bases, the inverse updated per pivot): the slacks give a feasible start
 (phase one), every pivot keeps feasibility, so stopping after
@@ -80,7 +94,8 @@ from interlock.errors import InterlockError
 __all__ = ["LoadPathBound", "LoadPathError", "load_path_bound", "LOAD_PATH_PASSES", "LOAD_PATH_PIVOTS",
            "LOAD_PATH_UNIT_PIVOTS", "LOAD_PATH_SAFETY", "LOAD_PATH_PERTURBATION", "LOAD_PATH_SLACK", "LOAD_PATH_EVALUATION_STEPS",
            "LOAD_PATH_BATCH", "LOAD_PATH_IMPROVEMENTS", "LOAD_PATH_FIRST_TRY", "LOAD_PATH_STALL",
-           "LOAD_PATH_RADII", "LOAD_PATH_REGIONAL", "LOAD_PATH_DIVERGENCE", "LOAD_PATH_DIVERGING"]
+           "LOAD_PATH_RADII", "LOAD_PATH_REGIONAL", "LOAD_PATH_DIVERGENCE", "LOAD_PATH_DIVERGING",
+           "LOAD_PATH_ROUNDING", "closed_bounds"]
 
 #: Gauss-Seidel passes at most before a policy must have proved (outside in, inside out, ...).  RhomBlock
 #: hexagons rounded to float32 prove after 2 passes up to n = 10, after 4 at n = 12.
@@ -94,8 +109,17 @@ LOAD_PATH_UNIT_PIVOTS = 400
 #: Every computed value is multiplied by ``1 + LOAD_PATH_SAFETY``: far above the rounding of 6 x 6 solves
 #: with condition numbers up to ~1e6 (``1e6 * 2^-52`` ~ 2e-10 per step, summed over at most thousands of steps).
 LOAD_PATH_SAFETY = 1e-6
-#: The local LPs' loads are perturbed by this share (random, fixed seed) while pivoting: no degenerate pivots.
-LOAD_PATH_PERTURBATION = 1e-7
+#: The residuals of the local solutions are rounded up by this share of the sums of absolute values they are
+#: computed from (at most 6 x 6 + 6 terms: the float error is below 40 * 2^-53 ~ 4e-15 of those sums), and the
+#: supersolution inequality ``c + P gamma <= gamma`` must hold with this share of ``gamma`` to spare (each entry a
+#: sum of at most 7 nonnegative terms: its rounding is below 8 * 2^-53 ~ 9e-16 of it).
+LOAD_PATH_ROUNDING = 1e-13
+#: The local LPs' loads are perturbed by this share (random, fixed seed) while pivoting: no degenerate pivots.  The
+#: final forces, solved with the true loads, may then come out negative by about this share, and dropping them is a
+#: residual that the proof counts: at 1e-7 it was as large as the tolerances paid (float32 RhomBlock hexagon
+#: n = 20: ``kappa`` 1.17, which leaves no proof near a margin of 1; n = 10: none at all); at 1e-10 ``kappa`` is
+#: below 1e-3 there, with as many pivots and bounds 0 to 10 % tighter.
+LOAD_PATH_PERTURBATION = 1e-10
 #: A policy's evaluated costs may be inflated by at most this share to become a supersolution (the proof).
 LOAD_PATH_SLACK = 0.05
 #: Value-iteration steps at most when a policy's costs are evaluated (each one product with the sparse ``P``).
@@ -235,6 +259,10 @@ def load_path_bound(A, eps, block_size: int = 6, *, start: float | None = None, 
         if best is not None and bound >= (1 - LOAD_PATH_STALL) * best.bound:
             break
         best = LoadPathBound(bound, paths.V.reshape(blocks * block_size, 2).copy(), done, total)
+        # what the unit loads' certificates miss: their own residual and kappa times their cost
+        finite = np.isfinite(paths.V)
+        slack = np.where(finite, paths.V_miss + paths.kappa * np.where(finite, paths.V, 0.0), 0.0)
+        slack = slack.reshape(blocks * block_size, 2)
         if target is not None and bound <= target:
             break
         policy, count = paths.policy(pivots, units=False, incidences=True)
@@ -243,10 +271,33 @@ def load_path_bound(A, eps, block_size: int = 6, *, start: float | None = None, 
             break
         proved = paths.gamma.copy()
     if best is not None and target is not None and best.bound > target:
-        best = _regional(A, eps, paths, proved, best, target, budget, stage)
+        best, slack = _regional(A, eps, paths, proved, best, slack, target, budget, stage)
     if best is None:
         return LoadPathBound(math.inf, np.full((blocks * block_size, 2), np.inf), done, total)
-    return LoadPathBound(best.bound, best.coordinates, best.passes, total)
+    coordinates = closed_bounds(best.coordinates, slack)
+    return LoadPathBound(float(coordinates.max(initial=0.0)), coordinates, best.passes, total)
+
+
+def closed_bounds(bounds, slack) -> np.ndarray:
+    """Bounds on ``+-x_j`` over ``P`` from ``+-x_j <= bounds_j + slack_j ||x||_inf`` for *every* coordinate and sign.
+
+    Every ``x`` (a finite vector) then has ``||x||_inf <= max bounds + max slack ||x||_inf``, hence
+    ``||x||_inf <= X = max bounds / (1 - max slack)`` when ``max slack < 1``, and ``+-x_j <= bounds_j + slack_j X``
+    (rounded up by ``2^-40``, far above the rounding of these few operations).  Where ``max slack >= 1`` (or a
+    bound is infinite) only the entries without slack keep their bound, the others get ``inf``.
+
+    Examples
+    --------
+    >>> closed_bounds(np.array([0.5, 0.25]), np.array([0.0, 0.5])).round(9).tolist()  # ||x||_inf <= 0.5 / 0.5
+    [0.5, 0.75]
+    """
+    bounds, slack = np.asarray(bounds, dtype=float), np.asarray(slack, dtype=float)
+    up = 1.0 + 2.0**-40
+    top, most = float(bounds.max(initial=0.0)), float(slack.max(initial=0.0))
+    if not most < 1.0 or not math.isfinite(top):
+        return np.where(slack > 0, math.inf, bounds) * up
+    X = top / (1.0 - most) * up
+    return (bounds + slack * X) * up
 
 
 def _diverging(medians: list, gamma: np.ndarray) -> bool:
@@ -259,8 +310,8 @@ def _diverging(medians: list, gamma: np.ndarray) -> bool:
         later >= LOAD_PATH_DIVERGENCE * earlier for earlier, later in zip(recent, recent[1:]))
 
 
-def _regional(A, eps, paths, proved, best: LoadPathBound, target: float, budget=None,
-              stage: str = "margin") -> LoadPathBound:
+def _regional(A, eps, paths, proved, best: LoadPathBound, slack: np.ndarray, target: float, budget=None,
+              stage: str = "margin") -> tuple[LoadPathBound, np.ndarray]:
     """Lower the coordinate bounds above ``target`` by exact LPs over the blocks near the coordinate's block.
 
     For block ``g`` and radius ``k`` take the blocks ``S`` within ``k``
@@ -268,8 +319,10 @@ def _regional(A, eps, paths, proved, best: LoadPathBound, target: float, budget=
     ``u >= 0``, ``(A^T u)_S = -+e_j`` with ``eps'_r = eps_r + gamma_i`` for a
     row whose other incidence ``i`` lies outside ``S`` (its load is carried on
     by the proved ``gamma``), ``eps_r`` otherwise.  As in (1) of the module,
-    ``u`` and the certificates behind ``gamma`` make a certificate; the solver's
-    residual on ``S`` is carried by the proved bounds ``V`` of its blocks.
+    ``u`` and the certificates behind ``gamma`` make a certificate; what it
+    misses (the solver's residual on ``S``, rounded up, and ``kappa`` times
+    the cost carried by ``gamma``) becomes the coordinate's ``slack`` (bounds
+    ``+-x_j <= V_j + slack_j ||x||_inf``, closed by :func:`closed_bounds`).
     Loads that cancel within ``S`` are no longer carried apart: radius 2 and
     3 take the worst coordinates of the 4,800-block hexagon from 1.4 to 0.35
     to 1.05.
@@ -278,6 +331,7 @@ def _regional(A, eps, paths, proved, best: LoadPathBound, target: float, budget=
 
     size = paths.size
     V = best.coordinates.reshape(-1, size, 2).copy()
+    missed = slack.reshape(-1, size, 2).copy()
     has = paths.other >= 0
     blocks = len(V)
     neighbours = sp.csr_matrix((np.ones(int(has.sum())), (paths.block[has], paths.block[paths.other[has]])),
@@ -312,12 +366,14 @@ def _regional(A, eps, paths, proved, best: LoadPathBound, target: float, budget=
             if result.status != 0 or result.x is None:
                 continue
             u = np.maximum(result.x, 0.0)
-            residual = (local @ u + load).reshape(len(region), size)  # carried by the region's proved bounds
-            carry = np.where(residual > 0, V[region, :, 1], V[region, :, 0]) * np.abs(residual)
-            value = (float(cost @ u) + float(carry.sum())) * (1.0 + LOAD_PATH_SAFETY)
-            V[g, k, side] = min(V[g, k, side], value)
+            value = float(cost @ u) * (1.0 + LOAD_PATH_SAFETY)
+            residual = float(np.abs(local @ u + load).sum()) + LOAD_PATH_ROUNDING * float((abs(local) @ u).sum())
+            miss = (residual + LOAD_PATH_ROUNDING) * (1.0 + LOAD_PATH_SAFETY) + paths.kappa * value
+            if value + miss * target < V[g, k, side] + missed[g, k, side] * target:  # both proved: the smaller
+                V[g, k, side], missed[g, k, side] = value, miss
     coordinates = V.reshape(-1, 2)
-    return LoadPathBound(float(coordinates.max(initial=0.0)), coordinates, best.passes, best.pivots)
+    return (LoadPathBound(float(coordinates.max(initial=0.0)), coordinates, best.passes, best.pivots),
+            missed.reshape(-1, 2))
 
 
 class _Paths:
@@ -348,6 +404,8 @@ class _Paths:
         self.gamma = np.full(len(pairs), np.inf)
         self.bases = np.full((len(pairs), size), -1, dtype=np.int64)  # each incidence LP's last basis
         self.V = np.full((blocks, size, 2), np.inf)
+        self.V_miss = np.zeros((blocks, size, 2))  # what the local solution of each unit load misses of it
+        self.kappa = math.inf  # the proved gamma's certificates miss at most kappa * gamma of their loads
         # each block's incidences, padded
         order = np.argsort(self.block, kind="stable")
         per_block = np.bincount(self.block, minlength=blocks)
@@ -361,10 +419,11 @@ class _Paths:
     def local(self, layer: np.ndarray, pivots: int, units: bool = True, incidences: bool = True):
         """The local LPs of the blocks ``layer`` at the current ``gamma``: every incidence load and every ``+-e_k``.
 
-        Returns ``(incidences, values, eps_parts, carried, forces)`` for the
-        incidence loads (``carried``: for each basic column the incidence whose
-        load it passes on, -1 for none), ``(blocks, k, sign, values)`` for the
-        unit loads, and the pivots done.
+        Returns ``(incidences, values, eps_parts, carried, forces, misses)``
+        for the incidence loads (``carried``: for each basic column the
+        incidence whose load it passes on, -1 for none; ``misses``: the
+        residuals of the forces, rounded up), ``(blocks, k, sign, values,
+        misses)`` for the unit loads, and the pivots done.
         """
         size, width = self.size, self.width
         cols = self.columns[layer]  # (b, width)
@@ -390,15 +449,16 @@ class _Paths:
         slots = which < width
         warm = np.full((len(owner), size), -1, dtype=np.int64)
         warm[slots] = self.bases[cols[owner[slots], which[slots]]]
-        values, parts, done, bases, forces = _simplex(M[owner], c[owner], e[owner], -loads[owner, which], pivots,
-                                                      warm)
+        values, parts, done, bases, forces, misses = _simplex(M[owner], c[owner], e[owner], -loads[owner, which],
+                                                              pivots, warm)
         self.bases[cols[owner[slots], which[slots]]] = bases[slots]
         values = values * (1.0 + LOAD_PATH_SAFETY)
         used = np.take_along_axis(np.concatenate([other, np.full((count, 2 * size), -1)], axis=1)[owner], bases,
                                   axis=1)  # the incidence each basic column loads (-1: the frame or a slack)
         unit = which[~slots] - width
-        return ((cols[owner[slots], which[slots]], values[slots], parts[slots], used[slots], forces[slots]),
-                (layer[owner[~slots]], unit % size, unit // size, values[~slots]), done)
+        return ((cols[owner[slots], which[slots]], values[slots], parts[slots], used[slots], forces[slots],
+                 misses[slots]), (layer[owner[~slots]], unit % size, unit // size, values[~slots], misses[~slots]),
+                done)
 
     def sweep(self, layers, pivots: int):
         """One Gauss-Seidel pass: each layer's local LPs at the latest values, which they replace.
@@ -418,9 +478,9 @@ class _Paths:
         done, found = 0, []
         everything = np.concatenate(self.layers)
         for start in range(0, len(everything), LOAD_PATH_BATCH):
-            incidence, (g, k, sign, unit), count = self.local(everything[start:start + LOAD_PATH_BATCH], pivots, units,
-                                                              incidences)
-            self.V[g, k, sign] = unit
+            incidence, (g, k, sign, unit, miss), count = self.local(everything[start:start + LOAD_PATH_BATCH], pivots,
+                                                                    units, incidences)
+            self.V[g, k, sign], self.V_miss[g, k, sign] = unit, miss
             found.append(incidence)
             done += count
         return [np.concatenate(part) for part in zip(*found)], done
@@ -428,6 +488,8 @@ class _Paths:
     def evaluate(self, policy) -> bool:
         """Set ``gamma`` to the proved cost of the certificates that ``policy`` builds; False where it proves nothing
         (``gamma`` then holds the values the policy's iteration reached: a guess for the next pass).
+
+        Also sets ``kappa`` (the module's docstring, "Floating point").
 
         With the local solutions fixed, the costs solve ``gamma = c + P gamma``
         (``c`` the tolerances paid on the block, ``P >= 0`` the loads passed
@@ -439,7 +501,7 @@ class _Paths:
         by the least share (at most :data:`LOAD_PATH_SLACK`) that makes them
         a supersolution, and that inequality is checked.
         """
-        incidences, values, parts, used, forces = policy
+        incidences, values, parts, used, forces, misses = policy
         count = len(self.gamma)
         finite = np.zeros(count, dtype=bool)
         finite[incidences[np.isfinite(values) & (parts > 0)]] = True
@@ -480,8 +542,13 @@ class _Paths:
                     break
         else:
             return False
-        if np.any(c + P @ solution > solution):
+        if np.any(c + P @ solution > solution * (1.0 - LOAD_PATH_ROUNDING)):  # with room for the sums' rounding
             return False
+        # the certificates miss rho = residuals + P rho <= kappa (I - P)^-1 c <= kappa gamma of their loads
+        residuals = misses[keep]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ratios = np.where(residuals > 0, residuals / c, 0.0)
+        self.kappa = float(ratios.max(initial=0.0)) * (1.0 + LOAD_PATH_ROUNDING)
         self.gamma[:] = np.inf
         self.gamma[incidences[keep]] = solution
         return True
@@ -517,11 +584,13 @@ def _simplex(M: np.ndarray, c: np.ndarray, e: np.ndarray, b: np.ndarray, pivots:
     vectorised over the stack.  Every iterate is feasible, so the value of
     the last basis is that of a feasible point even where the pivots ran out;
     the final forces are solved again from the basis.  Returns (values,
-    ``e . f``, pivots done, final bases, the forces on them).
+    ``e . f``, pivots done, final bases, the forces on them, and what the
+    forces on real columns miss of ``b``: ``|M f - b|_1`` rounded up by
+    :data:`LOAD_PATH_ROUNDING`, a slack left in the basis counted as missed).
     """
     N, s, p = M.shape
     if N == 0:
-        return np.zeros(0), np.zeros(0), 0, np.zeros((0, s), dtype=np.int64), np.zeros((0, s))
+        return np.zeros(0), np.zeros(0), 0, np.zeros((0, s), dtype=np.int64), np.zeros((0, s)), np.zeros(0)
     infinite = ~np.isfinite(c)
     c1 = infinite.astype(float)  # phase one: the columns that have no proved cost
     c2 = np.where(infinite, 0.0, c)
@@ -602,8 +671,12 @@ def _simplex(M: np.ndarray, c: np.ndarray, e: np.ndarray, b: np.ndarray, pivots:
                         (np.take_along_axis(c2, basis, axis=1) * exact).sum(axis=1))
     cost1 = np.maximum((np.take_along_axis(c1, basis, axis=1) * x).sum(axis=1),
                        (np.take_along_axis(c1, basis, axis=1) * exact).sum(axis=1))
-    parts = (np.take_along_axis(e, basis, axis=1) * exact).sum(axis=1)
-    return np.where(cost1 > 1e-12, np.inf, values), parts, count, basis, exact
+    parts = (np.take_along_axis(e, basis, axis=1) * exact).sum(axis=1) * (1.0 + LOAD_PATH_ROUNDING)
+    basic = np.take_along_axis(M, basis[:, None, :], axis=2)
+    real = np.where(basis < p - 2 * s, exact, 0.0)  # the slacks -e_k, +e_k are no rows of A
+    missed = np.abs(np.einsum("aij,aj->ai", basic, real) - b).sum(axis=1)
+    missed += LOAD_PATH_ROUNDING * (np.einsum("aij,aj->a", np.abs(basic), real) + np.abs(b).sum(axis=1))
+    return np.where(cost1 > 1e-12, np.inf, values), parts, count, basis, exact, missed * (1.0 + LOAD_PATH_ROUNDING)
 
 
 def _solve(matrices: np.ndarray, rhs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

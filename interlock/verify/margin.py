@@ -40,12 +40,12 @@ import scipy.sparse.linalg
 
 from interlock.errors import InterlockError
 from interlock.files import json_float
-from interlock.verify.load_paths import LOAD_PATH_PASSES, load_path_bound
+from interlock.verify.load_paths import LOAD_PATH_PASSES, closed_bounds, load_path_bound
 
 __all__ = ["Margin", "MarginError", "assess", "rounding_tolerance", "input_precision", "row_tolerances",
-           "margin_lower_bound", "one_stress_bounds", "tolerant_motion", "coordinate_motion",
+           "margin_lower_bound", "one_stress_bounds", "closed_bounds", "tolerant_motion", "coordinate_motion",
            "GRID_BITS", "DECIMAL_MIN_RTOL", "DECIMAL_MAX_RTOL", "DECIMAL_FULL_SHARE", "PRECISION_FACTOR",
-           "MARGIN_CHUNK", "ONE_STRESS_COLUMNS", "ONE_STRESS_WORK", "ONE_STRESS_FIRST", "ONE_STRESS_PROBE", "EXACT_RTOL", "TOLERANT_SHARE", "BEND_FACTOR", "MOTION_TIME_LIMIT"]
+           "MARGIN_CHUNK", "ROUNDING", "TAU_UP", "ONE_STRESS_COLUMNS", "ONE_STRESS_WORK", "ONE_STRESS_FIRST", "ONE_STRESS_PROBE", "EXACT_RTOL", "TOLERANT_SHARE", "BEND_FACTOR", "MOTION_TIME_LIMIT"]
 
 #: Coordinates that are all multiples of a power of two with at most this many significant bits lie on a
 #: grid (voxel puzzles, generated lattices): they are taken as exact, whatever type they were stored in.
@@ -79,6 +79,12 @@ ONE_STRESS_FIRST = 2.0
 #: (a margin of 4 or more on the sample: the whole set's largest bound was within 1.9 times the sample's on the
 #: float32 benchmarks).  Otherwise the load paths go first and the one-stress bound follows where they fail.
 ONE_STRESS_PROBE = 0.25
+#: Unit roundoff of float64 (2^-53) doubled: the rounding of the one-stress bound's dot products is bounded by this
+#: times their number of terms times the dot product of absolute values (see :class:`_OneStress`).
+ROUNDING = 2.0**-52
+#: ``tau`` is rounded up by this factor: the float ratio ``u0_r / w_r`` and the product err by at most
+#: ``2^-53`` each, so ``u0 + tau w >= 0`` holds exactly.
+TAU_UP = 1.0 + 2.0**-48
 #: Columns of ``(A^T A)^{-1}`` formed at a time by :func:`margin_lower_bound` (memory: rows x this).
 MARGIN_CHUNK = 64
 #: :func:`tolerant_motion` relaxes each row by this share of its tolerance.
@@ -195,40 +201,60 @@ def row_tolerances(matrix, contacts, tolerance) -> np.ndarray:
 
 
 def margin_lower_bound(A: sp.csr_matrix, eps: np.ndarray, stress, chunk: int = MARGIN_CHUNK) -> float:
-    """A lower bound on the margin ``rho`` from a positive stress ``w`` (``A^T w = 0``, ``w > 0``), by LP duality.
+    """A lower bound on the margin ``rho`` from a positive stress ``w`` (``A^T w ~ 0``, ``w > 0``), by LP duality.
 
     ``rho > 1`` iff the polytope ``P = {x : A x >= -eps}`` lies inside the
-    open unit box.  For each coordinate ``j`` and sign, any ``u >= 0`` with
-    ``A^T u = -+e_j`` bounds ``+-x_j <= eps . u`` on ``P`` (weak duality).
-    Take ``u0 = -+A (A^T A)^{-1} e_j`` and add the stress until it is
-    nonnegative: ``u = u0 + tau w`` with ``tau = max(0, max_r -u0_r / w_r)``.
-    Then every ``x`` in ``P`` has ``||x||_inf <= B = max_j (eps . u)``, and
-    ``rho >= 1 / B`` (:func:`one_stress_bounds` gives each ``B_j``).  Needs
-    full column rank; the inverse is one sparse LU, applied to ``chunk``
-    coordinates at a time (cost: ``n`` solves and a dense ``m x chunk`` block
-    per chunk, ``O(n m)``).  The float stress's residual ``A^T w`` is taken
-    as zero.  In :func:`assess` first where it is cheap and a sample of
-    coordinates predicts a proof (:data:`ONE_STRESS_FIRST`,
-    :data:`ONE_STRESS_PROBE`), else only for the coordinates the load paths
+    open unit box.  For each coordinate ``j`` and sign, any ``u >= 0`` bounds
+    ``+-x_j <= eps . u + |s|_1 ||x||_inf`` on ``P``, where ``s = A^T u +- e_j``
+    is what ``u`` misses of the load ``-+e_j`` (weak duality:
+    ``-eps . u <= u . A x = -+x_j + s . x``).  Take ``u0 = -+A (A^T A)^{-1}
+    e_j`` (as solved in floats) and add the stress until it is nonnegative:
+    ``u = u0 + tau w`` with ``tau = max(0, max_r -u0_r / w_r)`` (rounded up).
+    Its miss ``s`` is the solve's residual plus ``tau A^T w`` (the float
+    stress is a stress only up to rounding).  With ``B_j = eps . u`` and
+    ``delta_j = |s|_1`` (both rounded up by a bound on the rounding of their
+    dot products, :func:`one_stress_bounds`), every ``x`` in ``P`` has
+    ``||x||_inf <= max B + max delta ||x||_inf``, so ``||x||_inf <= X = max B
+    / (1 - max delta)`` when ``max delta < 1`` (nothing is proved otherwise),
+    and ``rho >= 1 / max_j (B_j + delta_j X)`` (:func:`closed_bounds`).
+    Needs full column rank; the inverse is one sparse LU, applied to
+    ``chunk`` coordinates at a time (cost: ``n`` solves and a dense ``m x
+    chunk`` block per chunk, ``O(n m)``).  In :func:`assess` first where it is
+    cheap and a sample of coordinates predicts a proof
+    (:data:`ONE_STRESS_FIRST`, :data:`ONE_STRESS_PROBE`), else only for the
+    coordinates the load paths
     (:func:`~interlock.verify.load_paths.load_path_bound`, 20 to 100 times
-    tighter, and far cheaper on large assemblies) leave above 1.
+    tighter where they prove) leave above 1.
     """
-    largest = float(one_stress_bounds(A, eps, stress, chunk=chunk).max(initial=0.0))
+    largest = float(closed_bounds(*one_stress_bounds(A, eps, stress, chunk=chunk)).max(initial=0.0))
     return math.inf if largest <= 0 else 1.0 / largest
 
 
 def one_stress_bounds(A: sp.csr_matrix, eps: np.ndarray, stress, columns=None, chunk: int = MARGIN_CHUNK,
-                      budget=None) -> np.ndarray:
-    """``B_j >= max {|x_j| : A x >= -eps}`` for each of ``columns`` (default all), from one stress (see
-    :func:`margin_lower_bound`); ``budget`` is checked after every chunk (TimeLimitReached, "margin").
+                      budget=None) -> tuple[np.ndarray, np.ndarray]:
+    """``(B, delta)`` with ``+-x_j <= B_j + delta_j ||x||_inf`` for every ``x`` with ``A x >= -eps``, for each of
+    ``columns`` (default all), from one stress (see :func:`margin_lower_bound`; :func:`closed_bounds` turns the
+    bounds of all columns into bounds on ``|x_j|``); ``budget`` is checked after every chunk (TimeLimitReached,
+    "margin").
+
+    Both are proved up to the rounding of the floats they are computed from: ``delta_j`` is the residual
+    ``|A^T u - -+e_j|_1`` of the nonnegative ``u`` actually formed, and both are rounded up by
+    :data:`ROUNDING` times the dot products of absolute values that the float dot products err by at most.
 
     Examples
     --------
     Three cubes in a row, the outer ones fixed: the middle one moves along the row only within its tolerances.
 
     >>> A = sp.csr_matrix(np.array([[1.0], [-1.0]]))
-    >>> one_stress_bounds(A, np.array([1e-3, 2e-3]), np.ones(2)).round(6).tolist()
-    [0.002]
+    >>> bounds, misses = one_stress_bounds(A, np.array([1e-3, 2e-3]), np.ones(2))
+    >>> bounds.round(6).tolist(), bool(misses[0] < 1e-9)
+    ([0.002], True)
+
+    A stress that is none (``A^T w = -0.5``) pays for it in ``delta``:
+
+    >>> bounds, misses = one_stress_bounds(A, np.array([1e-3, 2e-3]), np.array([1.5, 1.0]))
+    >>> closed_bounds(bounds, misses).round(6).tolist()  # the true bound is 0.002
+    [0.002222]
     """
     if isinstance(chunk, bool) or not isinstance(chunk, (int, np.integer)) or chunk < 1:
         raise MarginError(f"chunk must be a positive integer, got {chunk!r}")
@@ -247,8 +273,17 @@ class _OneStress:
         if w.shape != (self.A.shape[0],) or not np.all(np.isfinite(w)) or np.any(w <= 0):
             raise MarginError("stress must be a finite positive self-stress, one weight per row of A")
         self.w = w
-        self.weighted = float(self.eps @ w)
-        if not self.A.shape[1]:
+        m, n = self.A.shape
+        # rounding: a float dot product of k terms errs by at most gamma_k = k u / (1 - k u) times the dot product of
+        # the absolute values (any summation order, Higham, Accuracy and Stability, Sec. 3.1); every sum below has
+        # at most m + n terms, and ROUNDING * (m + n + 2) >= 2 gamma_{m + n} covers that and the few further
+        # operations on each result
+        self.gamma = ROUNDING * (m + n + 2)
+        self.size = np.asarray(abs(self.A).sum(axis=1)).ravel()  # |A| 1: fl(A^T U) errs by <= gamma |A|^T |U|
+        self.weighted = float(self.eps @ w) * (1.0 + self.gamma)  # >= eps . w
+        # |A^T w|_1, the float stress's miss, rounded up
+        self.miss = (float(np.abs(self.A.T @ w).sum()) + self.gamma * float(self.size @ w)) * (1.0 + self.gamma)
+        if not n:
             self.lu, self.work = None, 0.0
             return
         # A^T A is symmetric positive definite (full column rank): minimum degree on its pattern, no pivoting
@@ -256,28 +291,42 @@ class _OneStress:
         # 1.69 against 3.60 million entries in L + U), and the solves dominate
         self.lu = scipy.sparse.linalg.splu((self.A.T @ self.A).tocsc(), permc_spec="MMD_AT_PLUS_A",
                                            diag_pivot_thresh=0.0, options={"SymmetricMode": True})
-        self.work = float(self.A.shape[1]) * float(self.lu.L.nnz + self.lu.U.nnz)
+        self.work = float(n) * float(self.lu.L.nnz + self.lu.U.nnz)
 
-    def bounds(self, columns=None, chunk: int = MARGIN_CHUNK, budget=None) -> np.ndarray:
+    def bounds(self, columns=None, chunk: int = MARGIN_CHUNK, budget=None, stop_above: float | None = None):
+        """``(B, delta)`` for ``columns`` (:func:`one_stress_bounds`); with ``stop_above``, the chunks stop after
+        the first with a bound above it, and the columns not reached get ``B = inf``, ``delta = 0``."""
         A, eps, w = self.A, self.eps, self.w
         n = A.shape[1]
         columns = np.arange(n) if columns is None else columns
-        bounds = np.zeros(len(columns))
+        bounds, slack = np.full(len(columns), math.inf), np.zeros(len(columns))
         if not len(columns):
-            return bounds
+            return bounds, slack
+        AT = A.T.tocsr()
         for start in range(0, len(columns), chunk):
             part = np.arange(start, min(start + chunk, len(columns)))
             unit = np.zeros((n, len(part)))
             unit[columns[part], np.arange(len(part))] = 1.0
-            u = A @ self.lu.solve(unit)  # u0 = -u for the load +e_j, u0 = u for -e_j
-            paid = eps @ u
-            ratios = u / w[:, None]
-            tau_plus = np.maximum(0.0, ratios.max(axis=0))  # makes -u + tau w >= 0
-            tau_minus = np.maximum(0.0, -ratios.min(axis=0))
-            bounds[part] = np.maximum(tau_plus * self.weighted - paid, tau_minus * self.weighted + paid)
+            U = A @ np.ascontiguousarray(self.lu.solve(unit))  # u0 = -U for the load +e_j, u0 = U for -e_j
+            # the solve's residual |A^T U - e_j|_1 for the floats U as they are, rounded up
+            rest = AT @ U - unit
+            absolute = np.abs(U)
+            missed = (np.abs(rest).sum(axis=0) + self.gamma * (self.size @ absolute)) * (1.0 + self.gamma)
+            paid = eps @ U
+            rounding = self.gamma * (eps @ absolute)  # of eps . U
+            ratios = U / w[:, None]
+            # tau with -+U + tau w >= 0 exactly: the float ratios err by one rounding, TAU_UP covers it and the product
+            tau_plus = np.maximum(0.0, ratios.max(axis=0)) * TAU_UP  # makes -U + tau w >= 0
+            tau_minus = np.maximum(0.0, -ratios.min(axis=0)) * TAU_UP
+            plus = tau_plus * self.weighted - paid + rounding
+            minus = tau_minus * self.weighted + paid + rounding
+            bounds[part] = np.maximum(plus, minus) * (1.0 + self.gamma)
+            slack[part] = (missed + np.maximum(tau_plus, tau_minus) * self.miss) * (1.0 + self.gamma)
             if budget is not None:
                 budget.check("margin")
-        return bounds
+            if stop_above is not None and float(bounds[part].max(initial=0.0)) > stop_above:
+                break
+        return bounds, slack
 
 
 def tolerant_motion(A: sp.csr_matrix, eps: np.ndarray, tol: float = 1e-9, budget=None):
@@ -506,19 +555,21 @@ def assess(matrix, contacts, scale: float, stress, tolerance, source: str, *, pe
     A = matrix.matrix
     eps = row_tolerances(matrix, contacts, t)
     n = A.shape[1]
-    stressed, first = None, None  # the one-stress bound's factor, and its bounds on every coordinate if tried first
-    if n <= ONE_STRESS_COLUMNS and stress.shape == (A.shape[0],) and np.all(stress > 0):
+    # the one-stress bound per coordinate: +-x_j <= stressed_j + slack_j ||x||_inf (inf: not computed)
+    stressed, bounds, slack = None, np.full(n, math.inf), np.zeros(n)
+    usable = stress.shape == (A.shape[0],) and bool(np.all(stress > 0))
+    if n <= ONE_STRESS_COLUMNS and usable:
         stressed = _OneStress(A, eps, stress)
         if stressed.work * ONE_STRESS_WORK <= ONE_STRESS_FIRST * max(A.nnz, 1):
             # cheap enough to go first: a sample of one chunk says whether it is likely to prove (small p4 patches
-            # and hexagons: 3 to 10 times faster than the load paths; p4 radius 9: the load paths prove nothing)
+            # and hexagons: 3 to 10 times faster than the load paths; p4 radius 9 and 12: the load paths prove
+            # nothing); it stops at the first chunk with a bound above 1, and the load paths follow
             sample = np.sort(np.random.default_rng(0).permutation(n)[:MARGIN_CHUNK])
-            probed = stressed.bounds(sample, budget=budget)
-            if float(probed.max(initial=0.0)) <= ONE_STRESS_PROBE:
+            bounds[sample], slack[sample] = stressed.bounds(sample, budget=budget)
+            if float(bounds[sample].max(initial=0.0)) <= ONE_STRESS_PROBE:
                 rest = np.setdiff1d(np.arange(n), sample)
-                first = np.zeros(n)
-                first[sample], first[rest] = probed, stressed.bounds(rest, budget=budget)
-                worst = float(first.max(initial=0.0))
+                bounds[rest], slack[rest] = stressed.bounds(rest, budget=budget, stop_above=1.0)
+                worst = float(closed_bounds(bounds, slack).max(initial=0.0))
                 if worst < 1.0:
                     return Margin(math.inf if worst <= 0 else 1.0 / worst, math.inf, largest, source,
                                   per_contact=bool(per_contact))
@@ -529,13 +580,13 @@ def assess(matrix, contacts, scale: float, stress, tolerance, source: str, *, pe
         # small contacts, p4 patches of radius 9 and 12), the one-stress bound of the float verdict may (float32
         # bunny, frame {0, 1}: 1.7 against 0), and it is needed only for the coordinates the load paths leave above 1
         proved = found.coordinates.max(axis=1) if len(found.coordinates) else np.zeros(n)
-        open_ = np.flatnonzero(~(proved < 1.0))
-        if first is not None:
-            proved = np.minimum(proved, first)
-        elif len(open_) <= ONE_STRESS_COLUMNS:
+        open_ = np.flatnonzero(~(proved < 1.0) & ~np.isfinite(bounds))
+        if usable and 0 < len(open_) <= ONE_STRESS_COLUMNS:
             stressed = stressed if stressed is not None else _OneStress(A, eps, stress)
-            proved[open_] = np.minimum(proved[open_], stressed.bounds(open_, budget=budget))
-        worst = float(proved.max(initial=0.0))
+            bounds[open_], slack[open_] = stressed.bounds(open_, budget=budget)
+        # min(p, b + s X) <= min(p, b) + s X, with s counted only where the one-stress bound is the smaller
+        smaller = bounds < proved
+        worst = float(closed_bounds(np.where(smaller, bounds, proved), np.where(smaller, slack, 0.0)).max(initial=0.0))
         lower = max(lower, math.inf if worst <= 0 else 1.0 / worst)
     if lower > 1.0:
         return Margin(lower, math.inf, largest, source, per_contact=bool(per_contact))

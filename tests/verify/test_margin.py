@@ -231,7 +231,7 @@ def test_one_stress_bounds_never_undercut_the_coordinate_lps(seed, n, extra):
     import scipy.optimize
     import scipy.sparse as sp
 
-    from interlock.verify.margin import one_stress_bounds
+    from interlock.verify.margin import closed_bounds, one_stress_bounds
 
     rng = np.random.default_rng(seed)
     dense = rng.normal(size=(n + extra, n))
@@ -240,7 +240,7 @@ def test_one_stress_bounds_never_undercut_the_coordinate_lps(seed, n, extra):
     if np.linalg.matrix_rank(dense) < n:
         return
     eps = rng.uniform(0.5, 2.0, n + extra) * 1e-3
-    bounds = one_stress_bounds(sp.csr_matrix(dense), eps, w, chunk=3)
+    bounds = closed_bounds(*one_stress_bounds(sp.csr_matrix(dense), eps, w, chunk=3))
     for j in range(n):
         for sign in (1.0, -1.0):
             objective = np.zeros(n)
