@@ -347,9 +347,10 @@ def _reach(assembly: Assembly, frame, verdict) -> tuple[float | None, float | No
 
 
 def exact_margin(assembly: Assembly, frame, tolerance: float) -> float:
-    """The margin ``rho = 1 / max_j max {|x_j| : A x >= -eps}`` of ``assembly`` against one ``tolerance`` (a length):
-    two HiGHS LPs per column of its interlocking matrix (interior point: 0.18 s each on the bunny, 2.5x the dual simplex) (:func:`~interlock.verify.margin.row_tolerances`), each
-    within the unit box (a coordinate that reaches the box gives ``rho <= 1``)."""
+    """The margin ``rho = 1 / max_j max {|x_j| : A x >= -eps}`` of ``assembly`` against one ``tolerance`` (a length,
+    :func:`~interlock.verify.margin.row_tolerances`): two HiGHS LPs per column of its interlocking matrix, each
+    within the unit box (a coordinate that reaches the box gives ``rho <= 1``); interior point, 0.18 s an LP on
+    the bunny's 4274 x 468 matrix (dual simplex 0.47 s)."""
     A = interlocking_matrix(assembly, frame, contacts=(found := model_contacts(assembly)))
     eps = row_tolerances(A, found, tolerance)
     largest = 0.0
