@@ -91,6 +91,19 @@ def test_topolite_bunny_with_one_fixed_part_moves(bunny):
     assert v.interlocked is False and v.certified  # an exact rational motion (voxel coordinates)
     assert 0 not in v.moving and len(v.moving) > 1
 
+def test_noise_of_a_block_is_no_passage_for_its_neighbours(bunny):
+    """The bunny with Gaussian vertex noise of 1e-3 of its size reads depths of 5 % of a block; a part allowed to
+    reach that far into its neighbours slips out of the interlocked frame {0, 1}.  Depths are capped at
+    COARSE_RATIO of a block, the motion collides, and the answer is None, never "not interlocked"."""
+    assembly, _ = bunny
+    rng = np.random.default_rng(0)
+    noisy = Assembly.from_meshes([trimesh.Trimesh(m.vertices + rng.normal(scale=1e-3 * assembly.scale,
+                                                                          size=m.vertices.shape), m.faces)
+                                  for m in assembly.world_meshes()])
+    v = check(noisy, frame=[0, 1])
+    assert v.interlocked is None and "followed for real, it collides" in v.status
+
+
 
 def test_topolite_ania_moves(reference_data):
     folder = reference_data / "topolite" / "ania"
