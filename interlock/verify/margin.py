@@ -37,6 +37,7 @@ import numpy as np
 import scipy.optimize
 import scipy.sparse as sp
 import scipy.sparse.linalg
+from threadpoolctl import threadpool_limits
 
 from interlock.errors import InterlockError
 from interlock.files import json_float
@@ -45,7 +46,7 @@ from interlock.verify.load_paths import LOAD_PATH_PASSES, closed_bounds, load_pa
 __all__ = ["Margin", "MarginError", "assess", "rounding_tolerance", "input_precision", "row_tolerances",
            "margin_lower_bound", "one_stress_bounds", "closed_bounds", "tolerant_motion", "coordinate_motion",
            "GRID_BITS", "DECIMAL_MIN_RTOL", "DECIMAL_MAX_RTOL", "DECIMAL_FULL_SHARE", "PRECISION_FACTOR",
-           "MARGIN_CHUNK", "ROUNDING", "TAU_UP", "ONE_STRESS_COLUMNS", "ONE_STRESS_WORK", "ONE_STRESS_FIRST", "ONE_STRESS_PROBE", "EXACT_RTOL", "TOLERANT_SHARE", "BEND_FACTOR", "MOTION_TIME_LIMIT"]
+           "MARGIN_CHUNK", "ROUNDING", "ONE_STRESS_COLUMNS", "ONE_STRESS_WORK", "ONE_STRESS_FIRST", "ONE_STRESS_PROBE", "EXACT_RTOL", "TOLERANT_SHARE", "BEND_FACTOR", "MOTION_TIME_LIMIT"]
 
 #: Coordinates that are all multiples of a power of two with at most this many significant bits lie on a
 #: grid (voxel puzzles, generated lattices): they are taken as exact, whatever type they were stored in.
@@ -76,15 +77,14 @@ ONE_STRESS_WORK = 3.7e-5
 #: where the load paths prove nothing; 1.9 for the RhomBlock hexagon n = 20, where they prove in half the time) ...
 ONE_STRESS_FIRST = 2.0
 #: ... and when one chunk of :data:`MARGIN_CHUNK` coordinates (a fixed sample) already has bounds at most this
-#: (a margin of 4 or more on the sample: the whole set's largest bound was within 1.9 times the sample's on the
-#: float32 benchmarks).  Otherwise the load paths go first and the one-stress bound follows where they fail.
-ONE_STRESS_PROBE = 0.25
+#: (a margin of 2.2 or more on the sample: the whole set's largest bound was within 1.0 to 2.2 times the sample's
+#: on the float32 benchmarks; p4 radius 12: 0.40 against 0.55, where the load paths spend 5 s proving nothing;
+#: RhomBlock n = 20: 0.51, where they prove in 3.6 s against 5.9 s).  The chunks stop at the first bound above 1;
+#: then, or when the sample is above this, the load paths go first and the one-stress bound follows where they fail.
+ONE_STRESS_PROBE = 0.45
 #: Unit roundoff of float64 (2^-53) doubled: the rounding of the one-stress bound's dot products is bounded by this
 #: times their number of terms times the dot product of absolute values (see :class:`_OneStress`).
 ROUNDING = 2.0**-52
-#: ``tau`` is rounded up by this factor: the float ratio ``u0_r / w_r`` and the product err by at most
-#: ``2^-53`` each, so ``u0 + tau w >= 0`` holds exactly.
-TAU_UP = 1.0 + 2.0**-48
 #: Columns of ``(A^T A)^{-1}`` formed at a time by :func:`margin_lower_bound` (memory: rows x this).
 MARGIN_CHUNK = 64
 #: :func:`tolerant_motion` relaxes each row by this share of its tolerance.
@@ -106,7 +106,8 @@ class MarginError(InterlockError):
 class Margin:
     """Bounds on the margin ``rho`` of :mod:`interlock.verify.margin` (in tolerances) and what they rest on.
 
-    ``lower`` is proved (by load paths, :mod:`interlock.verify.load_paths`);
+    ``lower`` is proved (by load paths, :mod:`interlock.verify.load_paths`, or one stress,
+    :func:`margin_lower_bound`; what their float certificates miss counted);
     ``upper`` is attained by ``motion`` (a column vector of ``A``), or
     ``inf`` when no motion was tried or found; ``upper_status`` then says
     why ("not needed", "no motion within the tolerance found", or "solver
@@ -209,7 +210,7 @@ def margin_lower_bound(A: sp.csr_matrix, eps: np.ndarray, stress, chunk: int = M
     is what ``u`` misses of the load ``-+e_j`` (weak duality:
     ``-eps . u <= u . A x = -+x_j + s . x``).  Take ``u0 = -+A (A^T A)^{-1}
     e_j`` (as solved in floats) and add the stress until it is nonnegative:
-    ``u = u0 + tau w`` with ``tau = max(0, max_r -u0_r / w_r)`` (rounded up).
+    ``u = u0 + tau w`` with ``tau = max(0, max_r -u0_r / w_r)`` (exactly: the solve is scaled by ``w``).
     Its miss ``s`` is the solve's residual plus ``tau A^T w`` (the float
     stress is a stress only up to rounding).  With ``B_j = eps . u`` and
     ``delta_j = |s|_1`` (both rounded up by a bound on the rounding of their
@@ -276,13 +277,19 @@ class _OneStress:
         m, n = self.A.shape
         # rounding: a float dot product of k terms errs by at most gamma_k = k u / (1 - k u) times the dot product of
         # the absolute values (any summation order, Higham, Accuracy and Stability, Sec. 3.1); every sum below has
-        # at most m + n terms, and ROUNDING * (m + n + 2) >= 2 gamma_{m + n} covers that and the few further
-        # operations on each result
+        # at most m + n terms, and ROUNDING * (m + n + 2) >= 2 gamma_{m + n} covers that, the rounding of the scaled
+        # entries below and the few further operations on each result
         self.gamma = ROUNDING * (m + n + 2)
-        self.size = np.asarray(abs(self.A).sum(axis=1)).ravel()  # |A| 1: fl(A^T U) errs by <= gamma |A|^T |U|
+        size = np.asarray(abs(self.A).sum(axis=1)).ravel()  # |A| 1
+        self.spread = float(size @ w) * (1.0 + self.gamma)  # >= |A|^T w summed: fl((W A)^T V) errs by <= its share
         self.weighted = float(self.eps @ w) * (1.0 + self.gamma)  # >= eps . w
         # |A^T w|_1, the float stress's miss, rounded up
-        self.miss = (float(np.abs(self.A.T @ w).sum()) + self.gamma * float(self.size @ w)) * (1.0 + self.gamma)
+        self.miss = (float(np.abs(self.A.T @ w).sum()) + self.gamma * self.spread) * (1.0 + self.gamma)
+        # the solves are scaled by the stress: V = W^-1 A (A^T A)^-1 E, so that u = w * (tau -+ V_j) is nonnegative
+        # exactly for tau = max(0, max +-V_j) (no rounded ratios), and A^T u = tau A^T w -+ (W A)^T V_j
+        self.scaled = sp.csr_matrix(self.A.multiply(1.0 / w[:, None]))
+        self.stressed_T = sp.csr_matrix(self.A.multiply(w[:, None]).T)
+        self.eps_w = self.eps * w
         if not n:
             self.lu, self.work = None, 0.0
             return
@@ -296,37 +303,41 @@ class _OneStress:
     def bounds(self, columns=None, chunk: int = MARGIN_CHUNK, budget=None, stop_above: float | None = None):
         """``(B, delta)`` for ``columns`` (:func:`one_stress_bounds`); with ``stop_above``, the chunks stop after
         the first with a bound above it, and the columns not reached get ``B = inf``, ``delta = 0``."""
-        A, eps, w = self.A, self.eps, self.w
-        n = A.shape[1]
+        n = self.A.shape[1]
         columns = np.arange(n) if columns is None else columns
         bounds, slack = np.full(len(columns), math.inf), np.zeros(len(columns))
         if not len(columns):
             return bounds, slack
-        AT = A.T.tocsr()
+        # SuperLU's solves call the BLAS on small blocks: one thread (check's stages run so too; p4 radius 12: 9.6 s
+        # of solves, against 240 s on two threads with the other core busy)
+        with threadpool_limits(1, "blas"):
+            return self._chunks(columns, bounds, slack, chunk, budget, stop_above)
+
+    def _chunks(self, columns, bounds, slack, chunk, budget, stop_above):
         for start in range(0, len(columns), chunk):
             part = np.arange(start, min(start + chunk, len(columns)))
-            unit = np.zeros((n, len(part)))
-            unit[columns[part], np.arange(len(part))] = 1.0
-            U = A @ np.ascontiguousarray(self.lu.solve(unit))  # u0 = -U for the load +e_j, u0 = U for -e_j
-            # the solve's residual |A^T U - e_j|_1 for the floats U as they are, rounded up
-            rest = AT @ U - unit
-            absolute = np.abs(U)
-            missed = (np.abs(rest).sum(axis=0) + self.gamma * (self.size @ absolute)) * (1.0 + self.gamma)
-            paid = eps @ U
-            rounding = self.gamma * (eps @ absolute)  # of eps . U
-            ratios = U / w[:, None]
-            # tau with -+U + tau w >= 0 exactly: the float ratios err by one rounding, TAU_UP covers it and the product
-            tau_plus = np.maximum(0.0, ratios.max(axis=0)) * TAU_UP  # makes -U + tau w >= 0
-            tau_minus = np.maximum(0.0, -ratios.min(axis=0)) * TAU_UP
-            plus = tau_plus * self.weighted - paid + rounding
-            minus = tau_minus * self.weighted + paid + rounding
-            bounds[part] = np.maximum(plus, minus) * (1.0 + self.gamma)
-            slack[part] = (missed + np.maximum(tau_plus, tau_minus) * self.miss) * (1.0 + self.gamma)
+            bounds[part], slack[part] = self._chunk(columns[part])
             if budget is not None:
                 budget.check("margin")
             if stop_above is not None and float(bounds[part].max(initial=0.0)) > stop_above:
                 break
         return bounds, slack
+
+    def _chunk(self, columns):
+        """``(B, delta)`` of a few columns: the solves, ``tau`` and the misses of :func:`margin_lower_bound`."""
+        n = self.A.shape[1]
+        unit = np.zeros((n, len(columns)))
+        unit[columns, np.arange(len(columns))] = 1.0
+        V = self.scaled @ self.lu.solve(unit)  # u0 = -w V for the load +e_j, u0 = w V for -e_j
+        tau_plus = np.maximum(0.0, V.max(axis=0))  # u = w (tau - V_j) >= 0: A^T u ~ -e_j
+        tau_minus = np.maximum(0.0, -V.min(axis=0))  # u = w (tau + V_j) >= 0: A^T u ~ +e_j
+        tau = np.maximum(tau_plus, tau_minus)  # >= |V| entrywise: bounds the dot products of absolute values
+        paid = np.einsum("r,rk->k", self.eps_w, V)  # eps . (w V_j) (einsum: numpy's gemv was 4x slower here)
+        rounding = self.gamma * tau * self.weighted
+        bounds = np.maximum(tau_plus * self.weighted - paid, tau_minus * self.weighted + paid) + rounding
+        # what u misses of its load: |(W A)^T V_j - e_j|_1 (the solve's residual) plus tau |A^T w|_1
+        missed = np.abs(self.stressed_T @ V - unit).sum(axis=0) + self.gamma * tau * self.spread
+        return bounds * (1.0 + self.gamma), (missed + tau * self.miss) * (1.0 + self.gamma)
 
 
 def tolerant_motion(A: sp.csr_matrix, eps: np.ndarray, tol: float = 1e-9, budget=None):
