@@ -26,7 +26,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 __all__ = ["Precision", "coordinate_precision", "block_precision", "GRID_BITS", "DECIMAL_MIN_DIGITS",
-           "DECIMAL_FULL_SHARE", "DECIMAL_MIN_VALUES", "COMPUTED_ULPS", "PRECISION_FACTOR", "BEND_FACTOR"]
+           "DECIMAL_FULL_SHARE", "DECIMAL_MIN_VALUES", "DECIMAL_ULPS", "COMPUTED_ULPS", "PRECISION_FACTOR", "BEND_FACTOR"]
 
 #: Coordinates that are all multiples of a power of two with at most this many significant bits lie on a
 #: grid (voxel puzzles, generated lattices): they are exact, whatever type they were stored in.
@@ -36,8 +36,11 @@ DECIMAL_MIN_DIGITS = 4
 #: A decimal quantum counts as the file's rounding only if at least this share of the distinct numbers use its
 #: last digit (numbers cut to that digit, not round values that happen to be multiples of it) ...
 DECIMAL_FULL_SHARE = 0.5
-#: ... and there are at least this many distinct nonzero numbers (a box at x = 1.001 is not a rounded file).
+#: ... and there are at least this many distinct nonzero numbers (a box at x = 1.001 is not a rounded file) ...
 DECIMAL_MIN_VALUES = 8
+#: ... each within this many units in the last place of a whole number of quanta (parsing a decimal rounds by half
+#: a unit, dividing by the quantum by another).
+DECIMAL_ULPS = 8
 #: Float64 geometry that was computed (transforms, constructions) is taken as accurate to this many units in
 #: the last place of its coordinates: a few dozen operations, each rounding by half a unit.
 COMPUTED_ULPS = 64
@@ -127,6 +130,8 @@ def coordinate_precision(values) -> tuple[float, str]:
     (0.005, '4 significant digits')
     >>> coordinate_precision([0.2, 0.4, 0.1])[1]  # round values are exact, not rounded
     'float64'
+    >>> coordinate_precision(np.arange(1, 3, 0.0625) + 1e-12 * np.sin(np.arange(32)))[1]  # sixteenths moved by 1e-12
+    'float64'
     """
     x = np.asarray(values, dtype=float).ravel()
     x = np.unique(x[np.isfinite(x)])
@@ -150,7 +155,7 @@ def coordinate_precision(values) -> tuple[float, str]:
     for digits in range(DECIMAL_MIN_DIGITS, 16):  # k significant digits: each number its own quantum
         with np.errstate(all="ignore"):  # quanta below the smallest float64 are no rounding anyone wrote
             units = nonzero / 10.0 ** (exponents - digits + 1)
-        if (np.all(np.isfinite(units)) and np.all(np.abs(units - np.round(units)) <= 1e-6)
+        if (np.all(np.isfinite(units)) and _whole(units)
                 and np.mean(np.round(units) % 10 != 0) >= DECIMAL_FULL_SHARE):
             found.append((0.5 * 10.0 ** (exponent - digits + 1), f"{digits} significant digits"))
             break
@@ -201,7 +206,13 @@ def _cut_to(x: np.ndarray, quantum: float):
     with np.errstate(all="ignore"):
         units = x / quantum
     rounded = np.round(units)
-    if (np.all(np.isfinite(units)) and np.all(np.abs(units - rounded) <= 1e-6)
+    if (np.all(np.isfinite(units)) and _whole(units)
             and np.abs(rounded).max(initial=0.0) < 2.0**52):
         return rounded
     return None
+
+
+def _whole(units: np.ndarray) -> bool:
+    """Whether numbers divided by a quantum are whole numbers up to the rounding of parsing and dividing: a few units
+    in the last place of each (a grid model with noise of 1e-12 is not cut to 1e-4, though 0.0625 is 625 of them)."""
+    return bool(np.all(np.abs(units - np.round(units)) <= DECIMAL_ULPS * _EPS64 * np.maximum(np.abs(units), 1.0)))
