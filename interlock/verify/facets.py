@@ -17,7 +17,8 @@ from interlock.blocks.contact import ContactError, plane_bases
 from interlock.blocks.repair import merge_vertices
 
 __all__ = ["Facets", "FacetTable", "facets", "merged", "clean_polygons", "check_tolerance", "DEFAULT_CONTACT_RTOL",
-           "DEFAULT_ANGLE_TOL", "PLANAR_ULPS", "NOISE_FACTOR", "NOISE_ANGLE", "NOISE_TAIL", "NOISE_PAIRS", "NOISE_BALANCE", "TINY"]
+           "DEFAULT_ANGLE_TOL", "PLANAR_ULPS", "NOISE_FACTOR", "NOISE_ANGLE", "NOISE_TAIL", "NOISE_PAIRS",
+           "NOISE_BALANCE", "TINY"]
 
 #: Distance tolerance relative to the model size: two planes closer than this
 #: coincide, a gap narrower than this is a contact, an overlap thinner than this

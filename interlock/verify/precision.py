@@ -26,7 +26,8 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 __all__ = ["Precision", "coordinate_precision", "block_precision", "GRID_BITS", "DECIMAL_MIN_DIGITS",
-           "DECIMAL_FULL_SHARE", "DECIMAL_MIN_VALUES", "DECIMAL_ULPS", "COMPUTED_ULPS", "PRECISION_FACTOR", "BEND_FACTOR"]
+           "DECIMAL_FULL_SHARE", "DECIMAL_MIN_VALUES", "DECIMAL_ULPS", "COMPUTED_ULPS", "PRECISION_FACTOR",
+           "BEND_FACTOR"]
 
 #: Coordinates that are all multiples of a power of two with at most this many significant bits lie on a
 #: grid (voxel puzzles, generated lattices): they are exact, whatever type they were stored in.
