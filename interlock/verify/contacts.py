@@ -393,7 +393,7 @@ def _facet_tolerances(table: FacetTable, tolerances: _Tolerances):
     bend = np.where(table.planar, 0.0, table.flatness)
     distance = np.maximum(tolerances.search[table.block], table.grouping) + bend
     box = shapely.bounds(table.polygons).reshape(-1, 2, 2)
-    diameter = np.hypot(*(box[:, 1] - box[:, 0]).T)
+    diameter = np.nan_to_num(np.hypot(*(box[:, 1] - box[:, 0]).T), nan=0.0)  # an empty polygon has no extent
     if not tolerances.tilt:
         return distance, np.full(len(distance), tolerances.angle), diameter
     tilt = np.minimum(2.0 * distance / np.maximum(diameter, TINY), MAX_TILT)

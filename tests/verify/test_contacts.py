@@ -525,3 +525,25 @@ def test_facet_outlines_are_the_union_of_their_triangles_whatever_their_meshing(
     union = _unions(triangles, np.zeros(len(pieces), dtype=int), 1)[0]
     assert union.is_valid and union.geom_type == "Polygon" and abs(union.area - area) < 1e-12
     assert shapely.normalize(union).equals(shapely.union_all(triangles))
+
+
+@pytest.mark.parametrize("shift", [208.0, 150.0])
+def test_facets_rounded_to_nothing_are_no_crash(reference_data, tmp_path, shift):
+    """The TopoLite cube 208 units from the origin written with 4 significant digits: rounding by 0.05 on parts
+    0.8 across flattens some facets to empty polygons, which have no extent (were NaN, a crash inside cKDTree)."""
+    import interlock
+
+    cube = reference_data / "topolite" / "cube"
+    parts = interlock.read([cube / f"part_{k}.obj" for k in range(1, 10)], frame=())
+    lines, offset = [], 1
+    for k, mesh in enumerate(parts.world_meshes()):
+        lines.append(f"o block_{k}")
+        lines.extend("v " + " ".join(f"{x:.4g}" for x in vertex) for vertex in mesh.vertices + [shift, 0.5 * shift, 0])
+        lines.extend(f"f {a + offset} {b + offset} {c + offset}" for a, b, c in mesh.faces)
+        offset += len(mesh.vertices)
+    (tmp_path / "rounded.obj").write_text("\n".join(lines) + "\n")
+    rounded = interlock.read(tmp_path / "rounded.obj")
+    found = contacts(rounded)
+    assert all(np.isfinite(c.vertices).all() for c in found)
+    verdict = interlock.check(rounded, frame=[0, 8])
+    assert verdict.interlocked is None and "coarser than its blocks" in verdict.status
