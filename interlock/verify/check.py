@@ -303,10 +303,12 @@ def _decide(assembly, frame, translational, certify, rank_rtol, lp_tol, contacts
             distance = np.maximum(distance, PRESS_RTOL * assembly.block_sizes)
             for c in found:
                 distance[[c.i, c.j]] = np.maximum(distance[[c.i, c.j]], c.tolerance or 0.0)
-            shallow = check_overlaps(assembly, depth=distance)
+            held = assembly.block_indices(assembly.frame if frame is None else frame)
+            shallow = check_overlaps(assembly, depth=distance, fixed=held)
     if validate:
         with _stage(timings, "contacts", progress, budget):  # overlaps that pass must still be touches
-            deep = [o for o in shallow if o.deepness > distance[o.i] + distance[o.j]]
+            deep = [o for o in shallow if o.deepness > distance[o.i] + distance[o.j]
+                    and not (o.i in held and o.j in held)]  # two frame blocks give no row: their overlap is no concern
             widest = max((distance[o.i] + distance[o.j] for o in deep), default=0.0)
             refuse_overlaps_without_contact(assembly, deep, found, float(widest))
     with _stage(timings, "matrix", progress, budget):

@@ -210,7 +210,7 @@ def self_intersections(mesh, rtol: float = CROSSING_RTOL) -> np.ndarray:
     return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))].astype(int)
 
 
-def validate(assembly: Assembly, rtol: float = OVERLAP_RTOL, depth=None) -> list[Overlap]:
+def validate(assembly: Assembly, rtol: float = OVERLAP_RTOL, depth=None, fixed=()) -> list[Overlap]:
     """Refuse blocks that cross themselves or overlap; return the smaller overlaps that pass.
 
     Parameters
@@ -236,6 +236,10 @@ def validate(assembly: Assembly, rtol: float = OVERLAP_RTOL, depth=None) -> list
         :func:`refuse_overlaps_without_contact` to judge once the contacts
         are known (a block grown by 2e-4 into its neighbours).  None (the
         default): the volume alone decides.
+    fixed : sequence of int, optional
+        Blocks held fixed (a verdict's frame): two of them may overlap, as
+        their contact is no row of the interlocking matrix (a noisy file's
+        boundary blocks); such pairs are returned as passed, never refused.
 
     Returns
     -------
@@ -285,10 +289,14 @@ def validate(assembly: Assembly, rtol: float = OVERLAP_RTOL, depth=None) -> list
             raise OverlapError(f"block {block} ({assembly.labels[block]}) intersects itself: {len(crossing)} pairs of "
                                f"its triangles cross{beyond} (e.g. faces {crossing[0].tolist()}); blocks must be "
                                f"simple solids")
+    held = np.zeros(len(assembly), dtype=bool)
+    held[np.asarray(assembly.block_indices(fixed), dtype=int)] = True
     every = pair_overlaps(assembly)
     if allowed is not None:
         every = _measured(assembly, every, rtol, allowed)
-        deep = [o for o in every if o.depth is not None and o.depth > allowed(o.i, o.j)
+    judged = [o for o in every if not (held[o.i] and held[o.j])]
+    if allowed is not None:
+        deep = [o for o in judged if o.depth is not None and o.depth > allowed(o.i, o.j)
                 and o.volume > rtol * min(assembly.volumes[o.i], assembly.volumes[o.j])]
         if deep:
             o = max(deep, key=lambda item: item.depth / allowed(item.i, item.j))
@@ -298,7 +306,7 @@ def validate(assembly: Assembly, rtol: float = OVERLAP_RTOL, depth=None) -> list
                 f"one reaches {o.depth:.3g} inside the other (a common volume of {o.volume:.3g}), deeper than the "
                 f"tolerance {allowed(o.i, o.j):.3g}{more}; blocks of an assembly may only touch")
         return every
-    found = overlaps(assembly, rtol, every)
+    found = overlaps(assembly, rtol, judged)
     if found:
         i, j, volume = max(found, key=lambda item: item[2])
         more = f" ({len(found) - 1} more overlapping pairs)" if len(found) > 1 else ""

@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 from interlock import InterlockError
 from interlock.blocks import Assembly, presets
 from interlock.verify import check, contacts, interlocking_matrix
-from interlock.verify.validate import OverlapError
+from interlock.verify.validate import OverlapError, validate
 
 BUNNY_PARTS = 80
 
@@ -521,3 +521,20 @@ def test_vertex_noise_is_read_per_block_and_decides_the_topolite_cube(reference_
     not_held = check(noisy, frame=[8])
     assert not_held.interlocked is False and 0 in not_held.moving
     assert check(noisy, frame=[0, 8]).interlocked is True
+
+
+def test_overlapping_frame_blocks_do_not_stop_a_verdict():
+    """Two frame blocks that overlap give no row of A: the caged cube stays interlocked (a noisy file's boundary
+    blocks overlap by their noise); a free block overlapping the same way is refused, as is the file without a
+    frame."""
+    cage = _caged_cube()
+    extra = trimesh.creation.box(bounds=[[1.5, 0, 0], [2.5, 1, 1]])  # 0.5 deep into block 2 (the cube at x = 1)
+    meshes = list(cage.world_meshes()) + [extra]
+    held = Assembly.from_meshes(meshes, frame=list(range(1, 8)))
+    verdict = check(held)
+    assert verdict.interlocked is True
+    with pytest.raises(OverlapError, match="blocks 2 .* and 7 "):
+        check(held, frame=list(range(1, 7)))
+    with pytest.raises(OverlapError):
+        validate(held)
+    assert {(o.i, o.j) for o in validate(held, fixed=range(1, 8))} == {(2, 7)}
