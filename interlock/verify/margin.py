@@ -7,7 +7,8 @@ that slides out of the model may be "interlocked" in the file.  This module
 makes the verdict carry that uncertainty (``docs/interlocking.md``, "Margin
 and tolerance"):
 
-- :func:`input_precision` reads the rounding of the coordinates off the data;
+- :func:`rounding_tolerance` reads the rounding of the coordinates off the data
+  (:mod:`interlock.verify.precision`);
 - :func:`row_tolerances` turns a length tolerance ``t`` into a bound
   ``eps_r`` on the change of each row of the interlocking matrix ``A``: a
   contact vertex moved by ``t`` moves the row by ``t / L``, a facet of size
@@ -42,27 +43,13 @@ from threadpoolctl import threadpool_limits
 from interlock.errors import InterlockError
 from interlock.files import json_float
 from interlock.verify.load_paths import LOAD_PATH_PASSES, closed_bounds, load_path_bound
+from interlock.verify.precision import BEND_FACTOR, PRECISION_FACTOR, block_precision
 
-__all__ = ["Margin", "MarginError", "assess", "rounding_tolerance", "input_precision", "row_tolerances",
-           "margin_lower_bound", "one_stress_bounds", "closed_bounds", "tolerant_motion", "coordinate_motion",
-           "GRID_BITS", "DECIMAL_MIN_RTOL", "DECIMAL_MAX_RTOL", "DECIMAL_FULL_SHARE", "PRECISION_FACTOR",
-           "MARGIN_CHUNK", "ROUNDING", "ONE_STRESS_COLUMNS", "ONE_STRESS_WORK", "ONE_STRESS_FIRST", "ONE_STRESS_PROBE", "EXACT_RTOL", "TOLERANT_SHARE", "BEND_FACTOR", "MOTION_TIME_LIMIT"]
+__all__ = ["Margin", "MarginError", "assess", "rounding_tolerance", "row_tolerances", "margin_lower_bound",
+           "one_stress_bounds", "closed_bounds", "tolerant_motion", "coordinate_motion", "PRECISION_FACTOR",
+           "BEND_FACTOR", "MARGIN_CHUNK", "ROUNDING", "ONE_STRESS_COLUMNS", "ONE_STRESS_WORK", "ONE_STRESS_FIRST",
+           "ONE_STRESS_PROBE", "EXACT_RTOL", "TOLERANT_SHARE", "MOTION_TIME_LIMIT"]
 
-#: Coordinates that are all multiples of a power of two with at most this many significant bits lie on a
-#: grid (voxel puzzles, generated lattices): they are taken as exact, whatever type they were stored in.
-GRID_BITS = 20
-#: Text formats round to decimals: coordinates that are all multiples of a power of ten ``q`` with
-#: ``DECIMAL_MIN_RTOL <= q / max |x| <= DECIMAL_MAX_RTOL`` (at least four significant digits), whose last digit
-#: is used by at least ``DECIMAL_FULL_SHARE`` of them (numbers cut to that digit, not a designer's round
-#: values), are taken as rounded to ``q / 2``.  Coarser round values (0.25, 1.5) are exact, not rounding.
-DECIMAL_MIN_RTOL = 1e-12
-DECIMAL_MAX_RTOL = 1e-4
-DECIMAL_FULL_SHARE = 0.5
-#: The tolerance is this many times the rounding (a vertex moved by ``delta`` per coordinate moves by up to
-#: ``sqrt(3) delta``; two faces in contact each carry their own rounding).
-PRECISION_FACTOR = 4.0
-#: Faces measurably bent (contact deviation from its plane) count this many times their bend as tolerance.
-BEND_FACTOR = 2.0
 #: Up to this many coordinates left above 1 by the load paths, :func:`assess` also tries the one-stress bound on
 #: them (its cost grows as those coordinates times the fill of ``A^T A``'s factor; under the call's budget).  The
 #: p4 patch of radius 12 rounded to float32 (10,590 coordinates, no load-path proof) needs all of them: 14 s.
@@ -141,48 +128,6 @@ class Margin:
     def to_dict(self) -> dict:
         return {"lower": json_float(self.lower), "upper": json_float(self.upper), "tolerance": self.tolerance,
                 "source": self.source, "upper_status": self.upper_status, "per_contact": self.per_contact}
-
-
-def input_precision(vertices) -> tuple[float, str]:
-    """``(delta, source)``: how finely the coordinates were rounded (a length), read off the numbers.
-
-    In this order: all coordinates on a coarse dyadic grid (at most
-    :data:`GRID_BITS` significant bits, e.g. multiples of 1/16): exact
-    ("grid", ``delta`` the float64 rounding of the largest); all exactly
-    float32 numbers: ``delta = 2^-24 max |x|`` ("float32", what STL files
-    hold); all decimals cut to a quantum ``q`` of at least four significant
-    digits (:data:`DECIMAL_MAX_RTOL`, the last digit mostly used):
-    ``delta = q / 2`` ("decimals"); else ``delta = 2^-53 max |x|`` ("float64").
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> input_precision(np.array([[0.0625, 1.5, 2.0]]))[1]
-    'grid'
-    >>> delta, source = input_precision(np.float32(np.random.default_rng(0).random((9, 3))).astype(float))
-    >>> source, delta < 6e-8
-    ('float32', True)
-    >>> input_precision(np.array([[0.123456, 1.100003, 2.000001]]))
-    (5e-07, 'decimals')
-    >>> input_precision(np.array([[0.2, 0.4, 0.1]]))[1]  # round values are exact, not rounded
-    'float64'
-    """
-    x = np.asarray(vertices, dtype=float).ravel()
-    x = x[np.isfinite(x)]
-    top = float(np.abs(x).max(initial=0.0)) or 1.0
-    mantissa = np.frexp(x)[0] * 2.0**GRID_BITS  # an integer exactly when at most GRID_BITS bits are used
-    if np.all(mantissa == np.round(mantissa)):
-        return top * 2.0**-53, "grid"
-    if np.all(x.astype(np.float32).astype(float) == x):
-        return top * 2.0**-24, "float32"
-    for digits in range(-15, 31):  # the coarsest decimal quantum 10^-digits that the numbers are cut to
-        quantum = 10.0**-digits
-        if not DECIMAL_MIN_RTOL <= quantum / top <= DECIMAL_MAX_RTOL:
-            continue
-        units = np.round(x / quantum)
-        if np.all(np.abs(x / quantum - units) <= 1e-4) and np.mean(units % 10 != 0) >= DECIMAL_FULL_SHARE:
-            return 0.5 * quantum, "decimals"
-    return top * 2.0**-53, "float64"
 
 
 def row_tolerances(matrix, contacts, tolerance) -> np.ndarray:
@@ -453,15 +398,12 @@ def _tolerance_checked(tolerance, contacts: int):
 
 
 def rounding_tolerance(assembly) -> tuple[float, str]:
-    """``(t, source)``: :data:`PRECISION_FACTOR` times the :func:`input_precision` of the blocks' coordinates.
-
-    Blocks placed by non-identity transforms (generated assemblies) count as
-    float64: their placement was computed, not read from a file.
-    """
-    if not np.allclose(assembly.transforms, np.eye(4), rtol=0.0, atol=0.0):
-        return PRECISION_FACTOR * assembly.scale * 2.0**-53, "float64 input"
-    delta, source = input_precision(np.vstack([m.vertices for m in assembly.meshes]))
-    return PRECISION_FACTOR * delta, f"{source} input"
+    """``(t, source)``: :data:`PRECISION_FACTOR` times the coarsest rounding of a block's coordinates
+    (:func:`~interlock.verify.precision.block_precision`: read off each block's numbers; blocks placed by
+    non-identity transforms, generated assemblies, count as computed float64)."""
+    precision = block_precision(assembly)
+    worst = int(np.argmax(precision.delta))
+    return PRECISION_FACTOR * float(precision.delta[worst]), f"{precision.source[worst]} input"
 
 
 def assess(matrix, contacts, scale: float, stress, tolerance, source: str, *, per_contact: bool | None = None,

@@ -10,7 +10,7 @@ from scipy.spatial.transform import Rotation
 from interlock.blocks import Assembly
 from interlock.gallery import export
 from interlock.verify import check, contacts, finite_motion
-from interlock.verify.margin import input_precision
+from interlock.verify.precision import coordinate_precision
 
 BUNNY_PARTS = 80
 
@@ -43,9 +43,9 @@ def bunny_float32(bunny, tmp_path_factory, request):
 
 
 def test_precision_is_read_off_the_coordinates(bunny, bunny_float32):
-    assert input_precision(np.vstack([m.vertices for m in bunny.meshes]))[1] == "grid"  # multiples of 1/16
+    assert coordinate_precision(np.vstack([m.vertices for m in bunny.meshes]))[1] == "grid"  # multiples of 1/16
     assembly, _ = bunny_float32
-    delta, source = input_precision(np.vstack([m.vertices for m in assembly.meshes]))
+    delta, source = coordinate_precision(np.vstack([m.vertices for m in assembly.meshes]))
     assert source == "float32" and delta <= 2.0**-24 * assembly.scale
 
 
