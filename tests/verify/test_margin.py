@@ -489,3 +489,20 @@ def test_demand_must_be_loads():
     for demand in ([0.0, 0.0], [1.0, np.nan], [1.0, -1.0], [1.0]):
         with pytest.raises(MarginError, match="demand"):
             demand_stress(A, np.full(2, 1e-3), np.asarray(demand))
+
+
+def test_one_stress_bounds_on_threads_are_the_serial_ones(monkeypatch, bunny):
+    """Chunks solved two at a time give the very numbers of one at a time."""
+    import interlock.verify.margin as margin_module
+    from interlock.verify import interlocking_matrix
+    from interlock.verify.margin import one_stress_bounds, row_tolerances
+
+    found = contacts(bunny)
+    A = interlocking_matrix(bunny, frame=[0, 1], contacts=found)
+    eps = row_tolerances(A, found, 1e-6 * bunny.scale)
+    stress = check(bunny, frame=[0, 1], contacts=found).stress
+    results = []
+    for threads in (1, 2):
+        monkeypatch.setattr(margin_module, "MARGIN_THREADS", threads)
+        results.append(one_stress_bounds(A.matrix, eps, stress, chunk=7))
+    assert all(np.array_equal(a, b) for a, b in zip(*results))
