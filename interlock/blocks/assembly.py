@@ -397,7 +397,7 @@ def _checked_meshes(meshes, names) -> tuple[trimesh.Trimesh, ...]:
             meshes[k].invert()
             volume = -volume
         if not volume > 0:
-            raise AssemblyError(f"{names[k]} encloses no volume{_flattened_by_rounding(meshes[k].vertices)}")
+            raise AssemblyError(f"{names[k]} encloses no volume")
     return tuple(meshes)
 
 
@@ -460,16 +460,3 @@ def _checked_lattice(lattice) -> np.ndarray:
 # Deprecated: the markers of interlock's files live with the formats (interlock.formats.common); removed in 0.3.
 __getattr__ = deprecation.moved(__name__, dict.fromkeys(["HEADER_MARKER", "STL_RECORD", "BLOCK_DATA"],
                                                         "interlock.formats.common"))
-
-
-def _flattened_by_rounding(vertices) -> str:
-    """Why a block may enclose no volume: its coordinates' rounding, when that is at least a thousandth of it."""
-    from interlock.verify.precision import coordinate_precision
-
-    delta, source = coordinate_precision(vertices)
-    extent = float(np.ptp(np.asarray(vertices, dtype=float), axis=0).max(initial=0.0))
-    if source in ("grid", "float64") or not delta >= 1e-3 * extent:
-        return ""
-    remedy = "store them in float64 or nearer the origin" if "float" in source else "write them with more digits"
-    return (f": its coordinates ({source}) are rounded by up to {delta:.2g}, against an extent of {extent:.2g} "
-            f"as read; {remedy}")

@@ -239,17 +239,3 @@ def test_bodies_with_repeated_or_flipped_triangles_load_as_the_solids_they_bound
     loaded = read(path)
     assert len(loaded) == 2 and loaded.volumes.tolist() == pytest.approx([1.0, 1.0])
     assert sorted(len(mesh.faces) for mesh in loaded.meshes) == [12, 12]
-
-
-def test_a_block_flattened_by_its_rounding_says_so():
-    """A 0.01 cube 1e6 from the origin in float32 (spacing 0.0625 there) is read flat: the error names the rounding
-    and what would keep the block (a flat block of exact numbers says only that it is flat: the test above)."""
-    import trimesh
-
-    from interlock.blocks import Assembly
-
-    far = trimesh.creation.box(bounds=[[1e6 + 0.3] * 3, [1e6 + 0.31] * 3])  # both 1e6 + 5/16 in float32
-    far = trimesh.Trimesh(far.vertices.astype(np.float32).astype(float), far.faces, process=False)
-    with pytest.raises(AssemblyError, match=r"encloses no volume: its coordinates \(float32\) are rounded by up to "
-                                            r"0\.06, against an extent of 0 as read; store them in float64"):
-        Assembly.from_meshes([far])
