@@ -49,8 +49,8 @@ from interlock.verify.precision import BEND_FACTOR, PRECISION_FACTOR, block_prec
 __all__ = ["Margin", "MarginError", "assess", "rounding_tolerance", "row_tolerances", "margin_lower_bound",
            "one_stress_bounds", "demand_stress", "closed_bounds", "tolerant_motion", "coordinate_motion",
            "PRECISION_FACTOR", "BEND_FACTOR", "MARGIN_CHUNK", "MARGIN_THREADS", "ROUNDING", "ONE_STRESS_COLUMNS",
-           "ONE_STRESS_WORK", "ONE_STRESS_FIRST", "ONE_STRESS_PROBE", "DEMAND_FROM", "DEMAND_TIME_LIMIT",
-           "EXACT_RTOL", "TOLERANT_SHARE", "MOTION_TIME_LIMIT"]
+           "ONE_STRESS_WORK", "ONE_STRESS_FIRST", "ONE_STRESS_PROBE", "DEMAND_FROM", "DEMAND_UPPER",
+           "DEMAND_TIME_LIMIT", "EXACT_RTOL", "TOLERANT_SHARE", "MOTION_TIME_LIMIT"]
 
 #: Up to this many coordinates left above 1 by the load paths, :func:`assess` also tries the one-stress bound on
 #: them (its cost grows as those coordinates times the fill of ``A^T A``'s factor; under the call's budget).  The
@@ -75,6 +75,10 @@ ONE_STRESS_PROBE = 0.45
 #: coordinates whose bound is at least this (not only those above 1: the float stress leaves many just below it,
 #: and the margin is their largest; the float32 bunny, frame {0, 1}: 1.02 from 1, 1.67 from all).
 DEMAND_FROM = 0.5
+#: ... and only where the motions leave the margin possibly above this (where they show it at most 1.51, as for the
+#: bunny with one part fixed and noise 1e-9, no stress has come near: the proofs it gave were 40 to 50 times below
+#: those upper bounds, 1.67 under 81.3 and 1.32 under 56.6).
+DEMAND_UPPER = 4.0
 #: Seconds HiGHS may spend on the LP of :func:`demand_stress` (4 to 9 s on the bunny's 4,600 rows where it proves;
 #: the bunny with one part fixed and vertex noise of 1e-9, where no stress can prove anything, took the whole
 #: 120 s budget of the verdict).
@@ -549,8 +553,9 @@ def assess(matrix, contacts, scale: float, stress, tolerance, source: str, *, pe
         motion within the tolerance: the
         exact LP of the coordinate whose bound is largest
         (:func:`coordinate_motion`), then :func:`tolerant_motion`; when no
-        motion reaches the box, the one-stress bound again, with the stress of
-        :func:`demand_stress` for the coordinates above :data:`DEMAND_FROM`.  A solver
+        motion shows the margin at most :data:`DEMAND_UPPER`, the
+        one-stress bound again, with the stress of :func:`demand_stress` for the
+        coordinates above :data:`DEMAND_FROM`.  A solver
         failure is kept in ``upper_status``, never dropped.
 
     Raises
@@ -652,7 +657,7 @@ def assess(matrix, contacts, scale: float, stress, tolerance, source: str, *, pe
             motion, upper, status = tried, tried_upper, tried_status
         elif motion is None:
             status = tried_status
-    if upper > 1.0 and stressed is not None:
+    if upper > DEMAND_UPPER and stressed is not None:
         # no motion within the tolerance either: a stress built for the loads of the coordinates left above
         # DEMAND_FROM may prove what the float verdict's did not (after the motions: where one reaches the box, as
         # for a part that slides out, no stress can prove anything, and its LP is the slowest)
