@@ -32,6 +32,8 @@ tolerance, upper bounds.
 from __future__ import annotations
 
 import math
+import threading
+from collections import deque
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
@@ -48,7 +50,7 @@ from interlock.verify.precision import BEND_FACTOR, PRECISION_FACTOR, block_prec
 
 __all__ = ["Margin", "MarginError", "assess", "rounding_tolerance", "row_tolerances", "margin_lower_bound",
            "one_stress_bounds", "demand_stress", "closed_bounds", "tolerant_motion", "coordinate_motion",
-           "PRECISION_FACTOR", "BEND_FACTOR", "MARGIN_CHUNK", "MARGIN_THREADS", "ROUNDING", "ONE_STRESS_COLUMNS",
+           "PRECISION_FACTOR", "BEND_FACTOR", "MARGIN_CHUNK", "MARGIN_THREADS", "ROUNDING", "SINGLE_MISS", "ONE_STRESS_COLUMNS",
            "ONE_STRESS_WORK", "ONE_STRESS_FIRST", "ONE_STRESS_PROBE", "DEMAND_FROM", "DEMAND_UPPER",
            "DEMAND_TIME_LIMIT", "EXACT_RTOL", "TOLERANT_SHARE", "MOTION_TIME_LIMIT"]
 
@@ -88,6 +90,11 @@ DEMAND_TIME_LIMIT = 20.0
 ROUNDING = 2.0**-52
 #: Columns of ``(A^T A)^{-1}`` formed at a time by :func:`margin_lower_bound` (memory: rows x this).
 MARGIN_CHUNK = 64
+#: The one-stress bound solves with a float32 factor of ``A^T A`` first (p4 patch of radius 12 in float32: 0.066
+#: against 0.096 s a chunk; what the solves return only has to be near ``(A^T A)^-1``: the bound is computed in
+#: float64 from it and its residual is paid for in ``delta``); a chunk whose miss exceeds this (1e-3 there, where
+#: it adds 1e-3 times ``||x||_inf``, at most 0.55, to each bound) is solved again with the float64 factor.
+SINGLE_MISS = 1e-2
 #: Chunks of :data:`MARGIN_CHUNK` columns solved at once, one per thread (the one-stress bound of the p4 patch of
 #: radius 12 in float32 is 10,590 columns of solves).
 MARGIN_THREADS = 2
@@ -226,10 +233,10 @@ def one_stress_bounds(A: sp.csr_matrix, eps: np.ndarray, stress, columns=None, c
 
 
 class _OneStress:
-    """The one-stress bound of :func:`one_stress_bounds` with its factor of ``A^T A`` kept: ``bounds`` for any
-    columns, ``work`` the solves it costs for all of them (columns times factor entries)."""
+    """The one-stress bound of :func:`one_stress_bounds` with its factors of ``A^T A`` kept (:class:`_Normal`):
+    ``bounds`` for any columns, ``work`` the solves it costs for all of them (columns times factor entries)."""
 
-    def __init__(self, A, eps, stress, factor=None):
+    def __init__(self, A, eps, stress, normal=None):
         self.A = sp.csr_matrix(A, dtype=float)
         self.eps = _row_tolerances_checked(eps, self.A.shape[0])
         w = np.asarray(stress, dtype=float)
@@ -252,16 +259,8 @@ class _OneStress:
         self.scaled = sp.csr_matrix(self.A.multiply(1.0 / w[:, None]))
         self.stressed_T = sp.csr_matrix(self.A.multiply(w[:, None]).T)
         self.eps_w = self.eps * w
-        if not n:
-            self.lu, self.work = None, 0.0
-            return
-        # A^T A is symmetric positive definite (full column rank): minimum degree on its pattern, no pivoting
-        # (symmetric mode), fills about a third as much as COLAMD with pivots (p4 patch of radius 12 in float32:
-        # 1.69 against 3.60 million entries in L + U), and the solves dominate
-        self.lu = factor if factor is not None else scipy.sparse.linalg.splu(
-            (self.A.T @ self.A).tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-            options={"SymmetricMode": True})
-        self.work = float(n) * float(self.lu.L.nnz + self.lu.U.nnz)
+        self.normal = normal if normal is not None else _Normal(self.A)
+        self.work = float(n) * float(self.normal.fill)
 
     def bounds(self, columns=None, chunk: int = MARGIN_CHUNK, budget=None, stop_above: float | None = None):
         """``(B, delta)`` for ``columns`` (:func:`one_stress_bounds`); with ``stop_above``, the chunks stop after
@@ -286,7 +285,7 @@ class _OneStress:
                 part = np.asarray(columns[start:start + chunk], dtype=int)
                 unit = np.zeros((n, len(part)))
                 unit[part, np.arange(len(part))] = 1.0
-                largest = np.maximum(largest, np.abs(self.A @ self.lu.solve(unit)).max(axis=1))
+                largest = np.maximum(largest, np.abs(self.A @ self.normal.double().solve(unit)).max(axis=1))
                 if budget is not None:
                     budget.check("margin")
         return largest
@@ -294,15 +293,22 @@ class _OneStress:
     def _chunks(self, columns, bounds, slack, chunk, budget, stop_above):
         parts = [np.arange(start, min(start + chunk, len(columns))) for start in range(0, len(columns), chunk)]
         # SuperLU's solves let go of the GIL: MARGIN_THREADS chunks at a time, each on one BLAS thread (no
-        # spinning threads, so a busy second core costs no more than running them one after the other)
+        # spinning threads, so a busy second core costs no more than running them one after the other); a chunk is
+        # queued as soon as one is done, so that no thread waits for the slower of a pair
         with ThreadPoolExecutor(MARGIN_THREADS) as pool:
-            for first in range(0, len(parts), MARGIN_THREADS):
-                batch = parts[first:first + MARGIN_THREADS]
-                for part, (b, s) in zip(batch, pool.map(lambda part: self._chunk(columns[part]), batch)):
-                    bounds[part], slack[part] = b, s
+            running = deque()
+            for part in parts + [None] * MARGIN_THREADS:
+                if part is not None:
+                    running.append((part, pool.submit(self._chunk, columns[part])))
+                if len(running) < MARGIN_THREADS and part is not None or not running:
+                    continue
+                done, future = running.popleft()
+                bounds[done], slack[done] = future.result()
                 if budget is not None:
                     budget.check("margin")
-                if stop_above is not None and float(bounds[np.concatenate(batch)].max(initial=0.0)) > stop_above:
+                if stop_above is not None and float(bounds[done].max(initial=0.0)) > stop_above:
+                    for _, future in running:
+                        future.cancel()
                     break
         return bounds, slack
 
@@ -311,7 +317,16 @@ class _OneStress:
         n = self.A.shape[1]
         unit = np.zeros((n, len(columns)))
         unit[columns, np.arange(len(columns))] = 1.0
-        V = self.scaled @ self.lu.solve(unit)  # u0 = -w V for the load +e_j, u0 = w V for -e_j
+        if self.normal.single is not None:
+            V = self.scaled @ self.normal.single.solve(unit.astype(np.float32)).astype(float)
+            bounds, missed = self._bounds(V, unit)
+            if np.all(missed <= SINGLE_MISS):
+                return bounds, missed
+        return self._bounds(self.scaled @ self.normal.double().solve(unit), unit)
+
+    def _bounds(self, V, unit):
+        """``(B, delta)`` of the columns of ``unit`` from ``V``, any float approximation of ``W^-1 A (A^T A)^-1``
+        times them: the bound is proved whatever ``V`` is, and ``delta`` pays for its inaccuracy."""
         tau_plus = np.maximum(0.0, V.max(axis=0))  # u = w (tau - V_j) >= 0: A^T u ~ -e_j
         tau_minus = np.maximum(0.0, -V.min(axis=0))  # u = w (tau + V_j) >= 0: A^T u ~ +e_j
         tau = np.maximum(tau_plus, tau_minus)  # >= |V| entrywise: bounds the dot products of absolute values
@@ -321,6 +336,36 @@ class _OneStress:
         # what u misses of its load: |(W A)^T V_j - e_j|_1 (the solve's residual) plus tau |A^T w|_1
         missed = np.abs(self.stressed_T @ V - unit).sum(axis=0) + self.gamma * tau * self.spread
         return bounds * (1.0 + self.gamma), (missed + tau * self.miss) * (1.0 + self.gamma)
+
+
+class _Normal:
+    """The factors of ``A^T A`` (symmetric positive definite: full column rank) that the one-stress bound solves
+    with: float32 first (:data:`SINGLE_MISS`), float64 built when first needed (shared between threads)."""
+
+    def __init__(self, A):
+        self.matrix = (A.T @ A).tocsc()
+        self._double, self._lock = None, threading.Lock()
+        try:
+            self.single = _symmetric_factor(self.matrix.astype(np.float32)) if self.matrix.shape[0] else None
+        except RuntimeError:  # a pivot that float32 rounds to zero: float64 only
+            self.single = None
+        some = self.single if self.single is not None else self.double() if self.matrix.shape[0] else None
+        self.fill = 0 if some is None else some.L.nnz + some.U.nnz
+
+    def double(self):
+        """The float64 factor."""
+        with self._lock:
+            if self._double is None:
+                self._double = _symmetric_factor(self.matrix)
+            return self._double
+
+
+def _symmetric_factor(matrix):
+    """SuperLU of a symmetric positive definite matrix: minimum degree on its pattern, no pivoting (symmetric mode):
+    fills about a third as much as COLAMD with pivots (p4 patch of radius 12 in float32: 1.69 against 3.60 million
+    entries in L + U), and the solves dominate."""
+    return scipy.sparse.linalg.splu(matrix, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                                    options={"SymmetricMode": True})
 
 
 def demand_stress(A: sp.csr_matrix, eps: np.ndarray, demand, budget=None) -> np.ndarray | None:
@@ -375,7 +420,7 @@ def _with_demand_stress(stressed: _OneStress, bounds, slack, budget=None):
     w = demand_stress(stressed.A, stressed.eps, stressed.loads(failing, budget=budget), budget)
     if w is None:
         return bounds, slack
-    again, missed = _OneStress(stressed.A, stressed.eps, w, factor=stressed.lu).bounds(failing, budget=budget)
+    again, missed = _OneStress(stressed.A, stressed.eps, w, normal=stressed.normal).bounds(failing, budget=budget)
     better = again + missed < bounds[failing] + slack[failing]
     bounds, slack = bounds.copy(), slack.copy()
     bounds[failing[better]], slack[failing[better]] = again[better], missed[better]
