@@ -72,6 +72,10 @@ wrong, grey inconclusive, white refused, black crashed, blue unjudged); the blac
 and the right axis give the declined share in the band (the dashed line is
 the 10 % target), the label under each bar the median time of ``check``.
 
+A full run takes about six minutes a placement on one core; ``--shard K N``
+runs the placements ``p % N == K`` (one process per core), and ``--merge N``
+writes ``real_files.json`` and its chart from the N parts.
+
 A case is rebuilt for reproduction with
 ``perturbed(subject, placement, family)``, e.g.
 ``check(perturbed("bunny", 0, "4 digits"), frame=(1,))``.
@@ -80,6 +84,7 @@ A case is rebuilt for reproduction with
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import statistics
 import tempfile
@@ -93,7 +98,8 @@ import scipy.optimize
 import trimesh
 from scipy.spatial.transform import Rotation
 
-from benchmarks.common import REFERENCE_DATA, add_arguments, pyplot, save_chart, use_results_folder, write_json
+from benchmarks.common import (REFERENCE_DATA, add_arguments, pyplot, results_folder, save_chart, use_results_folder,
+                               write_json)
 import interlock
 from interlock.blocks import Assembly
 from interlock.errors import InterlockError
@@ -422,8 +428,14 @@ def _references(subject: str, frames: dict) -> dict:
     return out
 
 
-def run(quick: bool = False, placements: int | None = None, large: bool = False, only=None) -> dict:
+def run(quick: bool = False, placements: int | None = None, large: bool = False, only=None,
+        shard: tuple[int, int] | None = None) -> dict:
+    """Every subject through every placement and family; ``shard=(k, n)``: only the placements ``p`` with
+    ``p % n == k``, written as ``real_files_shard{k}of{n}`` for :func:`merge` (n processes, one per core)."""
     placements = placements if placements is not None else (QUICK_PLACEMENTS if quick else PLACEMENTS)
+    if shard is not None and not (len(shard) == 2 and 0 <= shard[0] < shard[1]):
+        raise ValueError(f"shard must be (k, n) with 0 <= k < n, got {shard!r}")
+    stem = "real_files" if shard is None else f"real_files_shard{shard[0]}of{shard[1]}"
     cases, references = [], {}
     start_all = time.perf_counter()
     with warnings.catch_warnings():
@@ -437,6 +449,8 @@ def run(quick: bool = False, placements: int | None = None, large: bool = False,
             original = _original(subject)
             references[subject] = refs = _references(subject, frames)
             for placement in range(placements):
+                if shard is not None and placement % shard[1] != shard[0]:
+                    continue
                 for family in FAMILIES:
                     start = time.perf_counter()
                     try:
@@ -469,12 +483,27 @@ def run(quick: bool = False, placements: int | None = None, large: bool = False,
                                   f"{outcome['status'][:300]}", flush=True)
                 print(f"  {subject} placement {placement} done ({time.perf_counter() - start_all:.0f} s)",
                       flush=True)
-            _report(cases, references, quick, placements, time.perf_counter() - start_all, final=False)
-    return _report(cases, references, quick, placements, time.perf_counter() - start_all, final=True)
+            _report(cases, references, quick, placements, time.perf_counter() - start_all, final=False, name=stem)
+    return _report(cases, references, quick, placements, time.perf_counter() - start_all, final=True, name=stem)
 
 
-def _report(cases, references, quick: bool, placements: int, seconds: float, final: bool) -> dict:
-    """Write the JSON and the chart of the cases so far (after each subject, so a long run leaves its part)."""
+def merge(shards: int) -> dict:
+    """``real_files`` from the ``shards`` parts written by ``run(shard=(k, shards))``: their cases together, the
+    references of the first, the longest part's seconds; complete only if every part is."""
+    parts = [json.loads((results_folder() / f"real_files_shard{k}of{shards}.json").read_text())
+             for k in range(shards)]
+    if len({(part["quick"], part["placements"], part["seed"]) for part in parts}) != 1:
+        raise ValueError("the shards were run with different --quick, --placements or seeds")
+    cases = sorted((case for part in parts for case in part["cases"]),
+                   key=lambda c: (c["subject"], c["placement"], FAMILIES.index(c["family"]), c["frame"]))
+    return _report(cases, parts[0]["references"], parts[0]["quick"], parts[0]["placements"],
+                   max(part["seconds"] for part in parts), final=all(part["complete"] for part in parts))
+
+
+def _report(cases, references, quick: bool, placements: int, seconds: float, final: bool,
+            name: str = "real_files") -> dict:
+    """Write the JSON (and, for the whole run, the chart) of the cases so far (after each subject, so a long run
+    leaves its part)."""
     summary = _summary(cases)
     if final:
         for family, row in summary.items():
@@ -486,8 +515,9 @@ def _report(cases, references, quick: bool, placements: int, seconds: float, fin
                "complete": final, "families": list(FAMILIES), "band_factor": BAND_FACTOR,
                "reach_tolerance": REACH_TOLERANCE, "references": references, "summary": summary,
                "targets": _targets(summary), "seconds": seconds, "cases": cases}
-    write_json("real_files", payload)
-    _chart(summary, placements)
+    write_json(name, payload)
+    if name == "real_files":
+        _chart(summary, placements)
     return payload
 
 
@@ -561,9 +591,16 @@ def _main() -> None:
                                                                      f"--quick {QUICK_PLACEMENTS})")
     parser.add_argument("--large", action="store_true", help="also TopoLite's 331-block 'chips' shell")
     parser.add_argument("--only", nargs="+", metavar="WORD", help="only the subjects whose name contains a word")
+    parser.add_argument("--shard", nargs=2, type=int, metavar=("K", "N"),
+                        help="only the placements p with p %% N == K (run N of these at once, then --merge N)")
+    parser.add_argument("--merge", type=int, metavar="N", help="write real_files from the N shards' results")
     args = parser.parse_args()
     use_results_folder(args.results)
-    run(quick=args.quick, placements=args.placements, large=args.large, only=args.only)
+    if args.merge:
+        merge(args.merge)
+        return
+    run(quick=args.quick, placements=args.placements, large=args.large, only=args.only,
+        shard=None if args.shard is None else tuple(args.shard))
 
 
 if __name__ == "__main__":

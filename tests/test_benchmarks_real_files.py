@@ -47,3 +47,19 @@ def test_a_small_run_classifies_every_case_and_writes_json_and_chart(tmp_path, m
     assert {case["class"] for case in record["cases"]} <= set(real_files.CLASSES)
     assert record["references"]["TopoLite cube"]["{0, 8}"]["reference"] is True
     assert (tmp_path / "real_files.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def test_shards_merge_into_the_whole_run(tmp_path, monkeypatch):
+    """Two shards of two placements (one each) merge into what one run of both writes: the same cases, in order."""
+    monkeypatch.setenv(common.RESULTS_VARIABLE, str(tmp_path))
+    whole = real_files.run(quick=True, placements=2, only=["TopoLite cube"])
+    for k in range(2):
+        part = real_files.run(quick=True, placements=2, only=["TopoLite cube"], shard=(k, 2))
+        assert {case["placement"] for case in part["cases"]} == {k}
+    merged = real_files.merge(2)
+    strip = [{k: v for k, v in case.items() if not k.endswith("seconds")} for case in whole["cases"]]
+    assert [{k: v for k, v in case.items() if not k.endswith("seconds")} for case in merged["cases"]] == strip
+    assert merged["summary"]["float64"]["cases"] == whole["summary"]["float64"]["cases"] == 4
+    assert json.loads((tmp_path / "real_files.json").read_text())["complete"] is True
+    with pytest.raises(ValueError, match="shard"):
+        real_files.run(quick=True, placements=2, shard=(2, 2))
