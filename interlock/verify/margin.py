@@ -50,9 +50,9 @@ from interlock.verify.precision import BEND_FACTOR, PRECISION_FACTOR, block_prec
 
 __all__ = ["Margin", "MarginError", "assess", "rounding_tolerance", "row_tolerances", "margin_lower_bound",
            "one_stress_bounds", "demand_stress", "closed_bounds", "tolerant_motion", "coordinate_motion",
-           "PRECISION_FACTOR", "BEND_FACTOR", "MARGIN_CHUNK", "MARGIN_THREADS", "ROUNDING", "SINGLE_MISS", "ONE_STRESS_COLUMNS",
-           "ONE_STRESS_WORK", "ONE_STRESS_FIRST", "ONE_STRESS_PROBE", "DEMAND_FROM", "DEMAND_UPPER",
-           "DEMAND_TIME_LIMIT", "EXACT_RTOL", "TOLERANT_SHARE", "MOTION_TIME_LIMIT"]
+           "PRECISION_FACTOR", "BEND_FACTOR", "MARGIN_CHUNK", "MARGIN_THREADS", "ROUNDING", "SINGLE_MISS",
+           "ONE_STRESS_COLUMNS", "ONE_STRESS_WORK", "ONE_STRESS_FIRST", "ONE_STRESS_PROBE", "DEMAND_FROM",
+           "DEMAND_UPPER", "DEMAND_TIME_LIMIT", "EXACT_RTOL", "TOLERANT_SHARE", "MOTION_TIME_LIMIT"]
 
 #: Up to this many coordinates left above 1 by the load paths, :func:`assess` also tries the one-stress bound on
 #: them (its cost grows as those coordinates times the fill of ``A^T A``'s factor; under the call's budget).  The
