@@ -435,7 +435,7 @@ def run(quick: bool = False, placements: int | None = None, large: bool = False,
     placements = placements if placements is not None else (QUICK_PLACEMENTS if quick else PLACEMENTS)
     if shard is not None and not (len(shard) == 2 and 0 <= shard[0] < shard[1]):
         raise ValueError(f"shard must be (k, n) with 0 <= k < n, got {shard!r}")
-    stem = "real_files" if shard is None else f"real_files_shard{shard[0]}of{shard[1]}"
+    stem = "real_files" if shard is None else _shard_name(*shard)
     cases, references = [], {}
     start_all = time.perf_counter()
     with warnings.catch_warnings():
@@ -490,14 +490,18 @@ def run(quick: bool = False, placements: int | None = None, large: bool = False,
 def merge(shards: int) -> dict:
     """``real_files`` from the ``shards`` parts written by ``run(shard=(k, shards))``: their cases together, the
     references of the first, the longest part's seconds; complete only if every part is."""
-    parts = [json.loads((results_folder() / f"real_files_shard{k}of{shards}.json").read_text())
-             for k in range(shards)]
+    parts = [json.loads((results_folder() / f"{_shard_name(k, shards)}.json").read_text()) for k in range(shards)]
     if len({(part["quick"], part["placements"], part["seed"]) for part in parts}) != 1:
         raise ValueError("the shards were run with different --quick, --placements or seeds")
     cases = sorted((case for part in parts for case in part["cases"]),
                    key=lambda c: (c["subject"], c["placement"], FAMILIES.index(c["family"]), c["frame"]))
     return _report(cases, parts[0]["references"], parts[0]["quick"], parts[0]["placements"],
                    max(part["seconds"] for part in parts), final=all(part["complete"] for part in parts))
+
+
+def _shard_name(k: int, shards: int) -> str:
+    """The results name of part ``k`` of ``shards``."""
+    return f"real_files_shard{k}of{shards}"
 
 
 def _report(cases, references, quick: bool, placements: int, seconds: float, final: bool,

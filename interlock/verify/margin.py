@@ -34,6 +34,7 @@ from __future__ import annotations
 import math
 import threading
 from collections import deque
+from itertools import islice
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
@@ -296,12 +297,10 @@ class _OneStress:
         # spinning threads, so a busy second core costs no more than running them one after the other); a chunk is
         # queued as soon as one is done, so that no thread waits for the slower of a pair
         with ThreadPoolExecutor(MARGIN_THREADS) as pool:
-            running = deque()
-            for part in parts + [None] * MARGIN_THREADS:
-                if part is not None:
-                    running.append((part, pool.submit(self._chunk, columns[part])))
-                if len(running) < MARGIN_THREADS and part is not None or not running:
-                    continue
+            waiting = iter(parts)
+            running = deque((part, pool.submit(self._chunk, columns[part]))
+                            for part in islice(waiting, MARGIN_THREADS))
+            while running:
                 done, future = running.popleft()
                 bounds[done], slack[done] = future.result()
                 if budget is not None:
@@ -310,6 +309,9 @@ class _OneStress:
                     for _, future in running:
                         future.cancel()
                     break
+                part = next(waiting, None)
+                if part is not None:
+                    running.append((part, pool.submit(self._chunk, columns[part])))
         return bounds, slack
 
     def _chunk(self, columns):
@@ -345,12 +347,15 @@ class _Normal:
     def __init__(self, A):
         self.matrix = (A.T @ A).tocsc()
         self._double, self._lock = None, threading.Lock()
+        self.single, self.fill = None, 0
+        if not self.matrix.shape[0]:
+            return
         try:
-            self.single = _symmetric_factor(self.matrix.astype(np.float32)) if self.matrix.shape[0] else None
+            self.single = _symmetric_factor(self.matrix.astype(np.float32))
         except RuntimeError:  # a pivot that float32 rounds to zero: float64 only
-            self.single = None
-        some = self.single if self.single is not None else self.double() if self.matrix.shape[0] else None
-        self.fill = 0 if some is None else some.L.nnz + some.U.nnz
+            pass
+        some = self.single if self.single is not None else self.double()
+        self.fill = some.L.nnz + some.U.nnz
 
     def double(self):
         """The float64 factor."""
