@@ -54,6 +54,7 @@ def run(args) -> int:
             from distributed import Client
         except ImportError:
             raise SweepError('--scheduler needs Dask: pip install "interlock[sweep]"') from None
+        _check_address_with_dask(args.scheduler)
         try:
             client = Client(args.scheduler, timeout=10)
         except OSError as error:
@@ -99,6 +100,23 @@ def run(args) -> int:
               file=sys.stderr)
         return 1
     return 0
+
+
+def _check_address_with_dask(address: str) -> None:
+    """Refuse an address Dask's own parser rejects (an unknown scheme, no port, a port that is no number) before
+    a Client starts its event loop for it: what a Client would say, without a thread to wait on."""
+    from distributed.comm.addressing import parse_address
+    from distributed.comm.registry import get_backend
+
+    from interlock.sweep import SweepError
+
+    try:
+        scheme, location = parse_address(address, strict=False)
+        if scheme != "inproc":  # in-process addresses have no host and port
+            get_backend(scheme).get_address_host_port(location)
+    except (ValueError, TypeError) as error:
+        raise SweepError(f"--scheduler {address!r} is not a Dask scheduler address ({error}); give one such as "
+                         "tcp://10.0.0.5:8786") from None
 
 
 def _check_address(address: str) -> None:

@@ -131,7 +131,7 @@ def unless_bent(verdict, A: InterlockingMatrix, found, bent, centroids):
         "tolerances (contacts(..., rtol=, angle_tol=)) keep such faces apart"))
 
 
-def unless_missed(verdict, assembly, reference, tolerance: float):
+def unless_missed(verdict, assembly, reference, tolerance: float, lacking: str | None = None):
     """The "not interlocked" verdict found on the caller's contacts, or None where the ``reference`` contacts block it.
 
     ``reference`` are the contacts of the default search
@@ -146,7 +146,8 @@ def unless_missed(verdict, assembly, reference, tolerance: float):
     :func:`~interlock.verify.margin.row_tolerances` for the length
     ``max(tolerance, BEND_FACTOR * deviation)`` of the row's contact, and
     must not slide across a reference contact bent beyond ``tolerance``
-    (:func:`unless_bent`).  Otherwise the verdict is None, naming the pair.
+    (:func:`unless_bent`).  Otherwise the verdict is None, naming the pair and ``lacking``: why the verdict's
+    contacts lack that one (default: the caller's contacts, with tolerances below the input's noise).
     """
     A = interlocking_matrix(assembly, verdict.frame, verdict.translational, contacts=reference)
     if not A.shape[0] or not len(A.free):
@@ -162,12 +163,13 @@ def unless_missed(verdict, assembly, reference, tolerance: float):
     if pushed[worst] > 1.0:
         contact = reference[A.row_contact[worst]]
         pairs = len({(reference[c].i, reference[c].j) for c in A.row_contact[pushed > 1.0]})
+        lacking = lacking or ("where the default contact search finds a contact that the given contacts lack: "
+                              "their tolerances are below the input's noise; use the default contacts or larger "
+                              "rtol/angle_tol")
         return dataclasses.replace(verdict, interlocked=None, status=(
-            f"floating point is not conclusive: on the given contacts, {moving_names(verdict.moving)} a "
-            f"first-order {verdict.motion_kind} motion, but it pushes blocks {contact.i} and {contact.j} into each "
-            f"other ({pushed[worst]:.3g} x the tolerance; {pairs} block pair(s) in all) where the default contact "
-            "search finds a contact that the given contacts lack: their tolerances are below the input's noise; "
-            "use the default contacts or larger rtol/angle_tol"))
+            f"floating point is not conclusive: {moving_names(verdict.moving)} a first-order "
+            f"{verdict.motion_kind} motion, but it pushes blocks {contact.i} and {contact.j} into each other "
+            f"({pushed[worst]:.3g} x the tolerance; {pairs} block pair(s) in all) {lacking}"))
     return unless_bent(verdict, A, reference, bent_contacts(reference, tolerance), assembly.centroids)
 
 

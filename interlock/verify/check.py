@@ -38,7 +38,7 @@ __all__ = ["Verdict", "check", "beyond_first_order", "block_noise", "opening_mot
            "FARKAS_CLOSED_RTOLS", "PROJECTION_ROUNDS", "STAGES", "RANK_RTOL", "RANK_CLEAR_RTOL", "GRAM_RESOLUTION",
            "GRAM_SURE_RTOL", "LP_TOL", "LP_SOLVERS", "MOVING_RTOL", "DENSE_COLUMNS", "FIRST_KERNEL_PROBE",
            "COARSE_RATIO", "NOISE_CONTACTS", "NOISE_SPREAD", "SOLVER_THREADS", "MAX_KERNEL_PROBE",
-           "INVERSE_ITERATIONS", "DEPTH_RTOL", "ESCAPE_BLOCKS", "ESCAPE_SEARCH"]
+           "INVERSE_ITERATIONS", "DEPTH_RTOL", "ESCAPE_BLOCKS", "ESCAPE_SEARCH", "NEAR_SPREAD"]
 
 #: A singular value at most ``RANK_RTOL * sigma_max`` is zero ...
 RANK_RTOL = 1e-9
@@ -49,6 +49,11 @@ LP_SOLVERS = ("clarabel", "highs")
 #: (:func:`~interlock.verify.tolerances.block_depths`) only where that reaches this share of a block: float64
 #: input reads ~1e-16, float32 ~1e-7, and below this the volume test has already decided.
 DEPTH_RTOL = 1e-9
+#: A motion of a noisy input must not push together faces that lie within this many times the noise of their two
+#: blocks (:func:`~interlock.verify.tolerances.block_noise`), found or not: a block's contacts read its noise low
+#: (a face of two triangles fits its plane better than its vertices lie), and TopoLite's shell with Gaussian noise
+#: of 2.7e-5 leaves a part 5e-5 from the frame where it touched, beyond NOISE_SPREAD times the noise read there.
+NEAR_SPREAD = 20.0
 #: ... and then with the single moving blocks that open the most, each moved alone as a rigid body: at most this many.
 ESCAPE_BLOCKS = 4
 #: Single blocks are tried only when at most this many move (one small LP each).
@@ -380,6 +385,8 @@ def _decide(assembly, frame, translational, certify, rank_rtol, lp_tol, contacts
         if contacts is not None:  # the caller's contacts may miss faces that touch: the default search is the judge
             motions = [_unless_missed(v, assembly, precision, tolerance) if v.interlocked is False else v
                        for v in motions]
+        elif tolerance is None and block_noise(found).any():  # noise may have moved touching faces a little apart
+            motions = [_unless_near(v, assembly, precision, kinds) if v.interlocked is False else v for v in motions]
         motions = [unless_cones(v, found, assembly.centroids, A, budget) if v.interlocked is False else v
                    for v in motions]
         verdict = next((v for v in motions if v.interlocked is False), motions[0])
@@ -620,6 +627,17 @@ def _unless_missed(verdict: Verdict, assembly: Assembly, precision: Precision, t
     # the rounding alone: unless_missed adds each contact's bend itself, and judges slides across faces bent beyond it
     return unless_missed(verdict, assembly, reference,
                          contact_tolerances(reference, precision, tolerance, bends=False))
+
+
+def _unless_near(verdict: Verdict, assembly: Assembly, precision: Precision, kinds: str) -> Verdict:
+    """:func:`~interlock.verify.admissible.unless_missed` against the faces within :data:`NEAR_SPREAD` times the
+    noise of the moving blocks and their neighbours: a motion that pushes such faces together is as likely blocked
+    by a contact the noise opened as free."""
+    reference = find_contacts(assembly, involving=verdict.moving, precision=precision, kinds=kinds,
+                              noise_spread=NEAR_SPREAD)
+    return unless_missed(verdict, assembly, reference, contact_tolerances(reference, precision, bends=False),
+                         lacking=f"across faces within {NEAR_SPREAD:g} times the input's vertex noise of each other "
+                                 "(a contact the noise may have opened); the file does not tell whether they touch")
 
 
 def _with_margin(verdict: Verdict, margin: Margin, A: InterlockingMatrix, blocks: int, coarsest=None) -> Verdict:

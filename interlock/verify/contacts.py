@@ -36,6 +36,10 @@ __all__ = [
     "MAX_TILT",
     "PRESS_RTOL",
     "search_distances",
+    "block_noise",
+    "NOISE_CONTACTS",
+    "NOISE_SHARE",
+    "NOISE_SPREAD",
 ]
 
 #: Contact polygons of area at most this times the model size squared are dropped.
@@ -59,6 +63,18 @@ MAX_TILT = 0.05
 #: diameter.  TopoLite's ``ania`` pieces cross by 4.6e-6 of their contact; a block grown by 2e-4 (1e-4 into its
 #: neighbours) overlaps them and is refused.
 PRESS_RTOL = 1e-5
+#: A block's noise is read (:func:`block_noise`) from at least this many contacts: fewer would take a designed
+#: fold of one or two faces for noise.
+NOISE_CONTACTS = 4
+#: The share of a block's contacts that must be bent by at least its noise (:func:`block_noise`): a p1 block with
+#: a fold of 1e-10 on two of its four faces reads no noise, a noisy mesh bends nearly all.
+NOISE_SHARE = 2.0 / 3.0
+#: A bend up to this many times the sum of its blocks' noise is noise: single bends spread above the level two
+#: thirds of the contacts reach (the TopoLite cube with Gaussian vertex noise of 1e-9: up to 4.3 times it, 2.1 to
+#: 3.7 times it for 95 % of the contacts, over six seeds).  Only a block whose contacts are nearly all bent has a
+#: noise at all, so exact or designed geometry (noise 0) is not affected.  The default search looks this far
+#: for the faces of a noisy block (:func:`contacts`).
+NOISE_SPREAD = 5.0
 #: What a contact search finds: ``"faces"`` (face-to-face contacts only, Def. 3.3) or ``"all"`` (also the
 #: vertex-face, edge-edge, vertex-edge and vertex-vertex contacts of Remark 3.11).
 CONTACT_MODELS = ("faces", "all")
@@ -69,7 +85,8 @@ KIND_SHARE = 0.5
 
 def contacts(assembly: Assembly, rtol: float | None = None, angle_tol: float = DEFAULT_ANGLE_TOL,
              area_rtol: float = DEFAULT_AREA_RTOL, involving=None,
-             gap: float = DEFAULT_GAP_RTOL, precision=None, budget=None, kinds: str = "faces") -> tuple[Contact, ...]:
+             gap: float = DEFAULT_GAP_RTOL, precision=None, budget=None, kinds: str = "faces",
+             noise_spread: float = NOISE_SPREAD) -> tuple[Contact, ...]:
     """All face-to-face contacts between the blocks of an assembly (with ``kinds="all"``: contacts of every type).
 
     Two blocks are in contact where a facet of one and a facet of the other
@@ -126,6 +143,13 @@ def contacts(assembly: Assembly, rtol: float | None = None, angle_tol: float = D
         Remark 3.11 (:func:`~interlock.verify.point_contacts.point_contacts`),
         within the same per-pair distance tolerance; those a face contact of
         the same pair implies are left out.
+    noise_spread : float, optional
+        Local model only: the pairs of a block whose contacts show vertex
+        noise (:func:`block_noise`) are searched again within this many times
+        the noise of their two blocks (default :data:`NOISE_SPREAD` = 5),
+        since noise tilts a small contact's triangles beyond what rounding
+        allows.  A larger value finds the faces a noisy file leaves a little
+        apart (what :func:`~interlock.verify.check` asks a motion to respect).
     budget : Budget, optional
         A time budget (:mod:`interlock.verify.budget`), checked between blocks
         of the facet matching and before the overlaps: TimeLimitReached
@@ -206,6 +230,7 @@ def contacts(assembly: Assembly, rtol: float | None = None, angle_tol: float = D
     angle_tol = check_tolerance("angle_tol", angle_tol)
     area_rtol = check_tolerance("area_rtol", area_rtol)
     gap = check_tolerance("gap", gap)
+    noise_spread = check_tolerance("noise_spread", noise_spread)
     if angle_tol >= math.pi / 2:
         raise ContactError(f"angle_tol must be below pi/2 radians, got {angle_tol}")
     if kinds not in CONTACT_MODELS:
@@ -213,12 +238,46 @@ def contacts(assembly: Assembly, rtol: float | None = None, angle_tol: float = D
     if len(assembly) < 2:
         return ()
     local = _tolerances(assembly, rtol, angle_tol, area_rtol, gap, precision)
+    found = _search(assembly, _candidate_pairs(assembly, local.search + local.gap, involving), local, budget, kinds)
+    if rtol is None and gap == 0:
+        found = _with_noisy_faces(assembly, found, local, noise_spread, involving, budget, kinds)
+    return found
+
+
+def _candidate_pairs(assembly: Assembly, reach: np.ndarray, involving=None) -> np.ndarray:
+    """Pairs ``(i, j)``, ``i < j``, of blocks whose boxes come within ``reach`` (per block) of each other, of which
+    at least one is among ``involving`` (all when None)."""
     lean = assembly.local_padding(NEIGHBOUR_RTOL)
-    graph = (assembly.neighbours if np.all(local.search + local.gap <= lean)
-             else assembly.neighbour_graph(pad=local.search + local.gap + lean))
+    graph = assembly.neighbours if np.all(reach <= lean) else assembly.neighbour_graph(pad=reach + lean)
     pairs = np.array(sorted((min(u, v), max(u, v)) for u, v in graph.edges if u != v), dtype=int).reshape(-1, 2)
     if involving is not None:
         pairs = pairs[np.isin(pairs, assembly.block_indices(involving, "involving")).any(axis=1)]
+    return pairs
+
+
+def _with_noisy_faces(assembly: Assembly, found, local: _Tolerances, spread: float, involving, budget,
+                      kinds) -> tuple[Contact, ...]:
+    """``found``, with the pairs of noisy blocks searched again within ``spread`` times their noise.
+
+    Vertex noise tilts a contact's few triangles by about the noise over their size, beyond the angle a face
+    rounded only by its coordinates may tilt: a small contact of a noisy block is missed, and the blocks seem
+    free to move through it (TopoLite's shell with noise of 1e-5: one part's 0.07-wide contact with the frame).
+    The noise its other contacts show (:func:`block_noise`) is how far its faces may lie from where they were.
+    """
+    noise = spread * block_noise(found)
+    noise = np.pad(noise, (0, len(assembly) - len(noise)))
+    if not noise.any():
+        return found
+    widened = replace(local, search=np.maximum(local.search, noise))
+    pairs = _candidate_pairs(assembly, widened.search, involving)
+    noisy = (noise[pairs] > 0).any(axis=1)
+    again = _pair_contacts(assembly, pairs[noisy], widened, budget, kinds) if noisy.any() else ()
+    kept = [c for c in found if not (noise[c.i] > 0 or noise[c.j] > 0)]
+    return tuple(sorted(kept + list(again), key=_order))
+
+
+def _search(assembly: Assembly, pairs: np.ndarray, local: _Tolerances, budget, kinds) -> tuple[Contact, ...]:
+    """The contacts of the candidate ``pairs`` under ``local``; instanced pairs of one kind computed once."""
     if not len(pairs):
         return ()
     model = kinds
@@ -266,6 +325,34 @@ def search_distances(assembly: Assembly, precision=None) -> np.ndarray:
     """
     precision = block_precision(assembly) if precision is None else precision
     return np.maximum(PRECISION_FACTOR * np.asarray(precision.delta, dtype=float), SEARCH_RTOL * assembly.block_sizes)
+
+
+def block_noise(found) -> np.ndarray:
+    """Per block (indexed up to the largest in ``found``): the bend that :data:`NOISE_SHARE` of its contacts' faces
+    reach, a length.
+
+    A noisy mesh bends nearly every face of several triangles by about its noise, and leaves single triangles
+    planar however noisy it is: the :attr:`~interlock.blocks.contact.Contact.deviation` that two thirds of a
+    block's contacts reach reads that noise.  A bend only some faces show (a fold of a designed face) is geometry,
+    not noise, and reads 0.  Fewer than :data:`NOISE_CONTACTS` contacts read no noise (0).
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace as Found
+    >>> found = [Found(i=0, j=k, deviation=d) for k, d in ((1, 1e-9), (2, 2e-9), (3, 3e-9), (4, 1e-7))]
+    >>> block_noise(found).tolist()  # block 0 reads its noise; the others have one contact each
+    [2e-09, 0.0, 0.0, 0.0, 0.0]
+    >>> folded = [Found(i=0, j=k, deviation=d) for k, d in ((1, 0.0), (2, 1e-10), (3, 1e-10), (4, 0.0))]
+    >>> block_noise(folded).tolist()[0]  # two folded faces of four: geometry
+    0.0
+    """
+    blocks = 1 + max((max(c.i, c.j) for c in found), default=-1)
+    bends = [[] for _ in range(blocks)]
+    for c in found:
+        bends[c.i].append(c.deviation)
+        bends[c.j].append(c.deviation)
+    return np.array([float(np.sort(b)[int(len(b) * (1.0 - NOISE_SHARE))]) if len(b) >= NOISE_CONTACTS else 0.0
+                     for b in bends])
 
 
 def _tolerances(assembly, rtol, angle_tol, area_rtol, gap, precision) -> "_Tolerances":
@@ -389,27 +476,28 @@ def _moved(contact: Contact, i: int, j: int, transform: np.ndarray, mirrored: bo
 
 def _facet_tolerances(table: FacetTable, tolerances: _Tolerances):
     """Per facet of the table: its distance tolerance (its block's search distance, its mesh's grouping distance,
-    and its own bend) and its angle tolerance (the angle that distance tilts a facet of its diameter by)."""
+    and its own bend), its tilt (the angle that distance tilts a facet of its diameter by; 0 outside the local
+    model) and its diameter."""
     bend = np.where(table.planar, 0.0, table.flatness)
     distance = np.maximum(tolerances.search[table.block], table.grouping) + bend
     box = shapely.bounds(table.polygons).reshape(-1, 2, 2)
     diameter = np.nan_to_num(np.hypot(*(box[:, 1] - box[:, 0]).T), nan=0.0)  # an empty polygon has no extent
     if not tolerances.tilt:
-        return distance, np.full(len(distance), tolerances.angle), diameter
-    tilt = np.minimum(2.0 * distance / np.maximum(diameter, TINY), MAX_TILT)
-    return distance, np.maximum(tolerances.angle, tilt), diameter
+        return distance, np.zeros(len(distance)), diameter
+    return distance, np.minimum(2.0 * distance / np.maximum(diameter, TINY), MAX_TILT), diameter
 
 
 def _matches(table: FacetTable, pairs, tolerances: _Tolerances, budget=None):
     """Global facet indices (gi, gj) of coplanar facets with opposite normals, blocks i < j, and their distance
     tolerances.
 
-    Facets ``f`` of block ``i`` and ``g`` of block ``j`` match when their normals are opposite within the larger of
-    their angle tolerances and each centroid lies within ``d_f + d_g`` (their distance tolerances) of the other's
+    Facets ``f`` of block ``i`` and ``g`` of block ``j`` match when their normals are opposite within the angle
+    tolerance, or within the sum of their tilts (each may lean by its own, :func:`_facet_tolerances`), and each
+    centroid lies within ``d_f + d_g`` (their distance tolerances) of the other's
     plane, plus what the angle between them adds over the distance of their centroids.  With a gap, facets up to
     ``gap`` farther apart match too (the overlap is tested later).
     """
-    distance, angle_of, diameter = _facet_tolerances(table, tolerances)
+    distance, tilt, diameter = _facet_tolerances(table, tolerances)
     pairs = np.asarray(pairs, dtype=int).reshape(-1, 2)
     pairs = pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
     radius = math.sqrt(2) * (1 + 1e-9)
@@ -426,7 +514,7 @@ def _matches(table: FacetTable, pairs, tolerances: _Tolerances, budget=None):
         both = np.r_[facets_i, facets_j]
         centre = table.origins[facets_i].mean(axis=0)
         reach = float(np.linalg.norm(table.origins[both] - centre, axis=1).max() + diameter[both].max())
-        a = max(float(angle_of[both].max()), TINY)
+        a = max(tolerances.angle, 2.0 * float(tilt[both].max()), TINY)
         t = max(float(distance[facets_i].max() + distance[facets_j].max()) + tolerances.gap
                 + (2 * a + PRESS_RTOL) * reach,
                 TINY * max(reach, TINY))
@@ -447,8 +535,8 @@ def _matches(table: FacetTable, pairs, tolerances: _Tolerances, budget=None):
     pair_distance = distance[gi] + distance[gj]
     slack = (pair_distance + tolerances.gap + PRESS_RTOL * np.minimum(diameter[gi], diameter[gj])
              + np.sin(angle) * (np.linalg.norm(apart, axis=1) + diameter[gi] + diameter[gj]))
-    ok = ((angle <= np.maximum(angle_of[gi], angle_of[gj])) & (np.abs(np.einsum("ki,ki->k", ni, apart)) <= slack)
-          & (np.abs(np.einsum("ki,ki->k", nj, apart)) <= slack))
+    ok = ((angle <= np.maximum(tolerances.angle, tilt[gi] + tilt[gj]))
+          & (np.abs(np.einsum("ki,ki->k", ni, apart)) <= slack) & (np.abs(np.einsum("ki,ki->k", nj, apart)) <= slack))
     return gi[ok], gj[ok], pair_distance[ok]
 
 

@@ -9,6 +9,7 @@ import math
 import numpy as np
 
 from interlock.blocks.assembly import Assembly
+from interlock.verify.contacts import NOISE_CONTACTS, NOISE_SHARE, NOISE_SPREAD, block_noise
 from interlock.verify.matrix import InterlockingMatrix
 from interlock.verify.precision import PRECISION_FACTOR, Precision
 
@@ -24,19 +25,6 @@ COARSE_RATIO = 0.01
 #: holds (the GeoCombSurfX patches written with 4 digits at coordinates up to 150, 3 % of a block: block 0 comes
 #: out of the file, not of the design), and float32 coordinates 1e6 model sizes from the origin leave no contact.
 UNDECIDABLE_RATIO = 0.02
-#: A block's noise is read (:func:`block_noise`) from at least this many contacts: fewer would take a designed
-#: fold of one or two faces for noise.
-NOISE_CONTACTS = 4
-#: The share of a block's contacts that must be bent by at least its noise (:func:`block_noise`): a p1 block with
-#: a fold of 1e-10 on two of its four faces reads no noise, a noisy mesh bends nearly all.
-NOISE_SHARE = 2.0 / 3.0
-#: A bend up to this many times the sum of its blocks' noise is noise: single bends spread above the level two
-#: thirds of the contacts reach (the TopoLite cube with Gaussian vertex noise of 1e-9: up to 4.3 times it, 2.1 to
-#: 3.7 times it for 95 % of the contacts, over six seeds).  Only a block whose contacts are nearly all bent has a
-#: noise at all, so exact or designed geometry (noise 0) is not affected.
-NOISE_SPREAD = 5.0
-
-
 def coarseness(assembly: Assembly, frame, precision: Precision) -> tuple[float, int | None]:
     """``(ratio, block)``: the largest rounding (times :data:`~interlock.verify.precision.PRECISION_FACTOR`) of a
     free block, or of a neighbour of one, against its size, and that block (``(0.0, None)`` without free blocks)."""
@@ -120,34 +108,6 @@ def block_depths(found, precision: Precision, blocks: int, tolerance=None) -> np
         noise = block_noise(found)
         depths[:len(noise)] += NOISE_SPREAD * noise[:blocks]
     return depths
-
-
-def block_noise(found) -> np.ndarray:
-    """Per block (indexed up to the largest in ``found``): the bend that :data:`NOISE_SHARE` of its contacts' faces
-    reach, a length.
-
-    A noisy mesh bends nearly every face of several triangles by about its noise, and leaves single triangles
-    planar however noisy it is: the :attr:`~interlock.blocks.contact.Contact.deviation` that two thirds of a
-    block's contacts reach reads that noise.  A bend only some faces show (a fold of a designed face) is geometry,
-    not noise, and reads 0.  Fewer than :data:`NOISE_CONTACTS` contacts read no noise (0).
-
-    Examples
-    --------
-    >>> from types import SimpleNamespace as Found
-    >>> found = [Found(i=0, j=k, deviation=d) for k, d in ((1, 1e-9), (2, 2e-9), (3, 3e-9), (4, 1e-7))]
-    >>> block_noise(found).tolist()  # block 0 reads its noise; the others have one contact each
-    [2e-09, 0.0, 0.0, 0.0, 0.0]
-    >>> folded = [Found(i=0, j=k, deviation=d) for k, d in ((1, 0.0), (2, 1e-10), (3, 1e-10), (4, 0.0))]
-    >>> block_noise(folded).tolist()[0]  # two folded faces of four: geometry
-    0.0
-    """
-    blocks = 1 + max(max(c.i, c.j) for c in found)
-    bends = [[] for _ in range(blocks)]
-    for c in found:
-        bends[c.i].append(c.deviation)
-        bends[c.j].append(c.deviation)
-    return np.array([float(np.sort(b)[int(len(b) * (1.0 - NOISE_SHARE))]) if len(b) >= NOISE_CONTACTS else 0.0
-                     for b in bends])
 
 
 def tolerance_source(found, A: InterlockingMatrix, precision: Precision) -> str:
