@@ -94,14 +94,17 @@ def test_topolite_bunny_with_one_fixed_part_moves(bunny):
 def test_noise_of_a_block_is_no_passage_for_its_neighbours(bunny):
     """The bunny with Gaussian vertex noise of 1e-3 of its size reads depths of 5 % of a block; a part allowed to
     reach that far into its neighbours slips out of the interlocked frame {0, 1}.  Depths are capped at
-    COARSE_RATIO of a block, the motion collides, and the answer is None, never "not interlocked"."""
+    COARSE_RATIO of a block, so a motion collides; and since noisy blocks' pairs are searched within their noise
+    (``contacts.NOISE_SPREAD``) the contacts hold it and the margin is below the noise.  The answer is None, never
+    "not interlocked"."""
     assembly, _ = bunny
     rng = np.random.default_rng(0)
     noisy = Assembly.from_meshes([trimesh.Trimesh(m.vertices + rng.normal(scale=1e-3 * assembly.scale,
                                                                           size=m.vertices.shape), m.faces)
                                   for m in assembly.world_meshes()])
     v = check(noisy, frame=[0, 1])
-    assert v.interlocked is None and "followed for real, it collides" in v.status
+    assert v.interlocked is None, v.status
+    assert "followed for real, it collides" in v.status or "coarser than its blocks' contacts" in v.status, v.status
 
 
 
