@@ -50,10 +50,12 @@ LP_SOLVERS = ("clarabel", "highs")
 #: input reads ~1e-16, float32 ~1e-7, and below this the volume test has already decided.
 DEPTH_RTOL = 1e-9
 #: A motion of a noisy input must not push together faces that lie within this many times the noise of their two
-#: blocks (:func:`~interlock.verify.tolerances.block_noise`), found or not: a block's contacts read its noise low
+#: blocks (:func:`~interlock.verify.contacts.block_noise`), found or not: a block's contacts read its noise low
 #: (a face of two triangles fits its plane better than its vertices lie), and TopoLite's shell with Gaussian noise
 #: of 2.7e-5 leaves a part 5e-5 from the frame where it touched, beyond NOISE_SPREAD times the noise read there.
 NEAR_SPREAD = 20.0
+NEAR_LACKING = (f"across faces within {NEAR_SPREAD:g} times the input's vertex noise of each other (a contact "
+                "the noise may have opened); the file does not tell whether they touch")
 #: ... and then with the single moving blocks that open the most, each moved alone as a rigid body: at most this many.
 ESCAPE_BLOCKS = 4
 #: Single blocks are tried only when at most this many move (one small LP each).
@@ -386,7 +388,8 @@ def _decide(assembly, frame, translational, certify, rank_rtol, lp_tol, contacts
             motions = [_unless_missed(v, assembly, precision, tolerance) if v.interlocked is False else v
                        for v in motions]
         elif tolerance is None and block_noise(found).any():  # noise may have moved touching faces a little apart
-            motions = [_unless_near(v, assembly, precision, kinds) if v.interlocked is False else v for v in motions]
+            motions = [_unless_missed(v, assembly, precision, None, kinds, NEAR_SPREAD, NEAR_LACKING)
+                       if v.interlocked is False else v for v in motions]
         motions = [unless_cones(v, found, assembly.centroids, A, budget) if v.interlocked is False else v
                    for v in motions]
         verdict = next((v for v in motions if v.interlocked is False), motions[0])
@@ -621,23 +624,15 @@ def _with_play(verdict: Verdict, A: InterlockingMatrix, found, budget: Budget | 
                                tolerances={**verdict.tolerances, "play": play, "widest_gap": widest})
 
 
-def _unless_missed(verdict: Verdict, assembly: Assembly, precision: Precision, tolerance) -> Verdict:
-    """:func:`~interlock.verify.admissible.unless_missed` against the default search, each contact its tolerance."""
-    reference = find_contacts(assembly, involving=verdict.moving, precision=precision)
+def _unless_missed(verdict: Verdict, assembly: Assembly, precision: Precision, tolerance, kinds: str = "faces",
+                   noise_spread: float = NOISE_SPREAD, lacking: str | None = None) -> Verdict:
+    """:func:`~interlock.verify.admissible.unless_missed` against the default search of the moving blocks (its
+    ``kinds``, noisy blocks' faces within ``noise_spread`` times their noise), each contact its tolerance."""
+    reference = find_contacts(assembly, involving=verdict.moving, precision=precision, kinds=kinds,
+                              noise_spread=noise_spread)
     # the rounding alone: unless_missed adds each contact's bend itself, and judges slides across faces bent beyond it
     return unless_missed(verdict, assembly, reference,
-                         contact_tolerances(reference, precision, tolerance, bends=False))
-
-
-def _unless_near(verdict: Verdict, assembly: Assembly, precision: Precision, kinds: str) -> Verdict:
-    """:func:`~interlock.verify.admissible.unless_missed` against the faces within :data:`NEAR_SPREAD` times the
-    noise of the moving blocks and their neighbours: a motion that pushes such faces together is as likely blocked
-    by a contact the noise opened as free."""
-    reference = find_contacts(assembly, involving=verdict.moving, precision=precision, kinds=kinds,
-                              noise_spread=NEAR_SPREAD)
-    return unless_missed(verdict, assembly, reference, contact_tolerances(reference, precision, bends=False),
-                         lacking=f"across faces within {NEAR_SPREAD:g} times the input's vertex noise of each other "
-                                 "(a contact the noise may have opened); the file does not tell whether they touch")
+                         contact_tolerances(reference, precision, tolerance, bends=False), lacking)
 
 
 def _with_margin(verdict: Verdict, margin: Margin, A: InterlockingMatrix, blocks: int, coarsest=None) -> Verdict:
