@@ -50,8 +50,10 @@ def test_a_small_run_classifies_every_case_and_writes_json_and_chart(tmp_path, m
 
 
 def test_shards_merge_into_the_whole_run(tmp_path, monkeypatch):
-    """Two shards of two placements (one each) merge into what one run of both writes: the same cases, in order."""
+    """Two shards of two placements (one each) merge into what one run of both writes: the same cases, in order
+    (two families of the twelve: sharding splits placements, not families)."""
     monkeypatch.setenv(common.RESULTS_VARIABLE, str(tmp_path))
+    monkeypatch.setattr(real_files, "FAMILIES", ("float64", "float32 STL"))
     whole = real_files.run(quick=True, placements=2, only=["TopoLite cube"])
     for k in range(2):
         part = real_files.run(quick=True, placements=2, only=["TopoLite cube"], shard=(k, 2))
@@ -60,6 +62,7 @@ def test_shards_merge_into_the_whole_run(tmp_path, monkeypatch):
     strip = [{k: v for k, v in case.items() if not k.endswith("seconds")} for case in whole["cases"]]
     assert [{k: v for k, v in case.items() if not k.endswith("seconds")} for case in merged["cases"]] == strip
     assert merged["summary"]["float64"]["cases"] == whole["summary"]["float64"]["cases"] == 4
+    assert set(merged["summary"]) == {"float64", "float32 STL"} and len(merged["cases"]) == 8
     assert json.loads((tmp_path / "real_files.json").read_text())["complete"] is True
     with pytest.raises(ValueError, match="shard"):
         real_files.run(quick=True, placements=2, shard=(2, 2))
