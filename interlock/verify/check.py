@@ -26,8 +26,7 @@ from interlock.verify.first_order import (DENSE_COLUMNS, FARKAS_CLOSED_RTOLS, FI
                                          interior_motion, opening_motion, positive_stress, rigid_cluster_motion)
 from interlock.verify.contacts import (CONTACT_MODELS, PRESS_RTOL, Contact, contacts as find_contacts, model_contacts,
                                       search_distances)
-from interlock.verify.load_paths import load_path_bound
-from interlock.verify.margin import Margin, assess, row_tolerances
+from interlock.verify.margin import Margin, assess, motion_bound, row_tolerances
 from interlock.verify.precision import PRECISION_FACTOR, Precision, block_precision
 from interlock.verify.matrix import InterlockingMatrix, interlocking_matrix
 from interlock.verify.tolerances import (COARSE_RATIO, NOISE_CONTACTS, NOISE_SPREAD, block_depths, block_noise,
@@ -604,20 +603,21 @@ def _with_play(verdict: Verdict, A: InterlockingMatrix, found, budget: Budget | 
     """An "interlocked" verdict on contacts across gaps, with the play the gaps allow to first order.
 
     Rows ``r`` of a contact across a gap ``g_r`` (:attr:`~interlock.verify.contacts.Contact.separation`)
-    may close by ``g_r``: every motion with ``A x >= -g`` is a play.  The load paths of
-    :func:`~interlock.verify.load_paths.load_path_bound` (with ``eps = g``) prove ``|x|_inf <= B`` for every
-    such motion: no block turns by more than ``B`` radians nor moves by more than ``B L``.
+    may close by ``g_r``: every motion with ``A x >= -g`` is a play.  :func:`~interlock.verify.margin.motion_bound`
+    (with ``eps = g``: the verdict's stress, or the load paths) proves ``|x|_inf <= B`` for every such motion: no
+    block turns by more than ``B`` radians nor moves by more than ``B L``.
     """
     gaps = np.array([c.separation for c in found], dtype=float)
     if verdict.interlocked is not True or not len(A.row_contact) or not gaps[A.row_contact].any():
         return verdict
     row_gaps = gaps[A.row_contact]
     # rows without a gap may not open at all: a floor far below the gaps keeps the bound's tolerances positive
-    proved = load_path_bound(A.matrix, np.maximum(row_gaps, 1e-9 * row_gaps.max()), A.block_size, budget=budget)
-    if math.isinf(proved.bound):
+    bound = motion_bound(A.matrix, np.maximum(row_gaps, 1e-9 * row_gaps.max()), verdict.stress, A.block_size,
+                         budget=budget)
+    if math.isinf(bound):
         return dataclasses.replace(verdict, status=f"{verdict.status}; gaps up to {row_gaps.max():.3g} within the "
                                                    "contact tolerance (no bound on their play proved)")
-    play = A.length_scale * proved.bound
+    play = A.length_scale * bound
     widest = float(gaps[A.row_contact].max())
     return dataclasses.replace(verdict, status=f"{verdict.status}; play at most {play:.3g}: the largest motion the "
                                                f"gaps permit (gaps up to {widest:.3g} within the contact tolerance)",
