@@ -250,6 +250,31 @@ def test_one_stress_bounds_never_undercut_the_coordinate_lps(seed, n, extra):
             assert bounds[j] >= -result.fun * (1 - 1e-9) - 1e-12
 
 
+@settings(max_examples=20, deadline=None, derandomize=True,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])  # set the same way in every example
+@given(seed=st.integers(0, 2**16), n=st.sampled_from([1, 3, 6]), extra=st.integers(1, 10), route=st.booleans())
+def test_motion_bound_never_undercuts_the_exact_reach(seed, n, extra, route, monkeypatch):
+    """``motion_bound`` (the play of gaps): through the stresses (the given one, then the one built for the loads)
+    or, when the one-stress bound may not go first, the load paths, ``R >= max ||x||_inf`` on ``{A x >= -eps}``."""
+    import scipy.sparse as sp
+
+    from interlock.verify import margin as margins
+
+    monkeypatch.setattr(margins, "ONE_STRESS_COLUMNS", 20000 if route else 0)
+    rng = np.random.default_rng(seed)
+    dense = rng.normal(size=(n + extra, n))
+    w = rng.uniform(0.1, 2.0, n + extra)
+    dense -= np.outer(w, w @ dense) / (w @ w)
+    if np.linalg.matrix_rank(dense) < n:
+        return
+    eps = rng.uniform(0.5, 2.0, n + extra) * 1e-3  # well above HiGHS' feasibility tolerance: the LPs are exact
+    bound = margins.motion_bound(sp.csr_matrix(dense), eps, w, block_size=n)  # one block and the frame
+    exact = _exact_reach(dense, eps)
+    assert bound >= exact * (1 - 1e-9)
+    if route:
+        assert np.isfinite(bound)
+
+
 def test_load_paths_stop_once_their_values_keep_doubling():
     """The passes give up (nothing proved, the one-stress bound follows) once the median value has doubled from one
     try to the next (the p4 patch of radius 9 in float32); values that settle (hexagons, p4 radius 6) go on."""

@@ -47,12 +47,18 @@ def _margin_at_most(A, eps, columns):
     return 1.0 / reach
 
 
-@pytest.mark.parametrize("times", [1, 200])
-def test_the_margin_never_exceeds_the_exact_one(escher_float32, times):
+@pytest.mark.parametrize("times, route", [(1, "one stress"), (200, "demand stress"), (200, "load paths")])
+def test_the_margin_never_exceeds_the_exact_one(escher_float32, times, route, monkeypatch):
     """At the float32 tolerance (the one-stress bound goes first and proves) and 200 times it (its sample is above
-    ONE_STRESS_PROBE: the load paths go first), the proved margin is at most the exact margin (bounded above by the
-    coordinate LPs of the ten coordinates the one-stress bound finds worst), and at least the one-stress bound's."""
+    ONE_STRESS_PROBE: with at most DEMAND_FIRST_COLUMNS coordinates the stress built for their loads goes first,
+    else the load paths), the proved margin is at most the exact margin (bounded above by the coordinate LPs of the
+    ten coordinates the one-stress bound finds worst), and at least the one-stress bound's."""
+    from interlock.verify import margin as margins
+
     assembly, found, A, stress = escher_float32
+    assert A.shape[1] <= margins.DEMAND_FIRST_COLUMNS
+    if route == "load paths":
+        monkeypatch.setattr(margins, "DEMAND_FIRST_COLUMNS", 0)
     tolerance, source = rounding_tolerance(assembly)
     assert source == "float32 input"
     eps = row_tolerances(A, found, times * tolerance)
@@ -66,5 +72,7 @@ def test_the_margin_never_exceeds_the_exact_one(escher_float32, times):
                                   np.sort(np.random.default_rng(0).permutation(A.shape[1])[:64]))
     if times == 1:  # the sample predicts a proof: the one-stress bound is the margin proved
         assert sample.max() <= ONE_STRESS_PROBE and margin.lower == pytest.approx(one_stress, rel=1e-12)
+    elif route == "demand stress":  # the stress built for the loads proves more than the float verdict's
+        assert sample.max() > ONE_STRESS_PROBE and margin.lower > 1.5 * one_stress
     else:  # the load paths went first and prove more than one stress does
         assert sample.max() > ONE_STRESS_PROBE and margin.lower > 2 * one_stress
