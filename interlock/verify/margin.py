@@ -88,9 +88,9 @@ DEMAND_UPPER = 4.0
 #: TopoLite bunny with vertex noise 1e-7, frame {0, 1}, 468 coordinates: margin at least 2 in 0.7 s, where the load
 #: paths spent 10 s proving nothing).
 DEMAND_FIRST_COLUMNS = 3000
-#: Seconds HiGHS may spend on the LP of :func:`demand_stress` (4 to 9 s on the bunny's 4,600 rows where it proves;
-#: the bunny with one part fixed and vertex noise of 1e-9, where no stress can prove anything, took the whole
-#: 120 s budget of the verdict).
+#: Seconds HiGHS may spend on the LP of :func:`demand_stress` (under a second on the bunny's 4,600 rows since it has
+#: bounds only; 4 to 19 s before, and the bunny with one part fixed and vertex noise of 1e-9, where no stress can
+#: prove anything, took the whole 120 s budget of the verdict).
 DEMAND_TIME_LIMIT = 20.0
 #: Unit roundoff of float64 (2^-53) doubled: the rounding of the one-stress bound's dot products is bounded by this
 #: times their number of terms times the dot product of absolute values (see :class:`_OneStress`).
@@ -634,7 +634,9 @@ def assess(matrix, contacts, scale: float, stress, tolerance, source: str, *, pe
         :data:`ONE_STRESS_FIRST` times the load paths' (estimated,
         :data:`ONE_STRESS_WORK`) and a sample of :data:`MARGIN_CHUNK`
         coordinates has bounds at most :data:`ONE_STRESS_PROBE`, stopped as
-        soon as it proves a margin above 1; else, or when it does not, the
+        soon as it proves a margin above 1 (with the sample above it and at
+        most :data:`DEMAND_FIRST_COLUMNS` coordinates: all of them, then with
+        the stress of :func:`demand_stress`); else, or when it does not, the
         load-path lower bound
         (:func:`~interlock.verify.load_paths.load_path_bound`, stopped once
         it exceeds 1), each coordinate bounded by the smaller of the two (the
