@@ -59,3 +59,24 @@ def test_noise_spread_is_a_tolerance(noisy_shell):
 
     with pytest.raises(ContactError, match="noise_spread must be a finite number >= 0"):
         contacts(noisy_shell[18], noise_spread=-1.0)
+
+
+def test_a_part_of_a_noisy_bunny_comes_out_by_a_motion_that_keeps_the_faces_within_the_noise():
+    """The TopoLite bunny with part 1 fixed (truth: a part comes out) and vertex noise of 1e-5: the first motion the
+    LP finds pushes blocks 27 and 42, whose faces lie within the noise, into each other (inconclusive before).  With
+    every pair of faces within NEAR_SPREAD times the noise taken as contacts too, a motion remains: it keeps those
+    faces whether they touch or not, so the answer is "not interlocked"."""
+    import numpy as np
+
+    from interlock.verify import interlocking_matrix
+    from interlock.verify.check import NEAR_SPREAD
+
+    bunny = real_files.perturbed("bunny", 19, NOISE)
+    verdict = check(bunny, frame=[1])
+    assert verdict.interlocked is False, verdict.status
+    assert "touching or not" in verdict.status and "near faces" in verdict.timings
+    near = contacts(bunny, kinds="all", noise_spread=NEAR_SPREAD)
+    A = interlocking_matrix(bunny, [1], contacts=tuple(contacts(bunny, kinds="all")) + tuple(near))
+    x = A.columns(verdict.motion[A.free])
+    y = A.matrix @ x
+    assert y.min() >= -1e-9 * np.abs(y).max() and y.max() > 0  # it closes none of them and opens some
