@@ -269,6 +269,12 @@ class _OneStress:
         self.normal = normal if normal is not None else _Normal(self.A)
         self.work = float(n) * float(self.normal.fill)
 
+    @property
+    def goes_first(self) -> bool:
+        """Cheap enough to go before the load paths: its estimated work is at most :data:`ONE_STRESS_FIRST` times
+        theirs (:data:`ONE_STRESS_WORK`)."""
+        return self.work * ONE_STRESS_WORK <= ONE_STRESS_FIRST * max(self.A.nnz, 1)
+
     def bounds(self, columns=None, chunk: int = MARGIN_CHUNK, budget=None, stop_above: float | None = None):
         """``(B, delta)`` for ``columns`` (:func:`one_stress_bounds`); with ``stop_above``, the chunks stop after
         the first with a bound above it, and the columns not reached get ``B = inf``, ``delta = 0``."""
@@ -419,11 +425,11 @@ def demand_stress(A: sp.csr_matrix, eps: np.ndarray, demand, budget=None) -> np.
     return np.maximum(w, 1e-12 * float(w.max()))
 
 
-def _with_demand_stress(stressed: _OneStress, bounds, slack, budget=None):
+def _with_demand_stress(stressed: _OneStress, bounds, slack, budget=None, columns=None):
     """Each coordinate's bound, improved where the stress of :func:`demand_stress` proves a smaller one: built for
-    the coordinates whose bound is at least :data:`DEMAND_FROM` (their least-squares loads), with the factor of
-    ``A^T A`` kept."""
-    failing = np.flatnonzero(~(bounds < DEMAND_FROM))
+    ``columns`` (default: the coordinates whose bound is at least :data:`DEMAND_FROM`; their least-squares loads),
+    with the factor of ``A^T A`` kept."""
+    failing = np.flatnonzero(~(bounds < DEMAND_FROM)) if columns is None else np.asarray(columns, dtype=int)
     if not len(failing) or len(failing) > ONE_STRESS_COLUMNS:
         return bounds, slack
     w = demand_stress(stressed.A, stressed.eps, stressed.loads(failing, budget=budget), budget)
@@ -459,13 +465,9 @@ def motion_bound(A: sp.csr_matrix, eps: np.ndarray, stress, block_size: int = 6,
     if (stress is not None and stress.shape == (m,) and np.all(np.isfinite(stress)) and np.all(stress > 0)
             and 0 < n <= ONE_STRESS_COLUMNS):
         stressed = _OneStress(A, eps, stress)
-        if stressed.work * ONE_STRESS_WORK <= ONE_STRESS_FIRST * max(A.nnz, 1):
+        if stressed.goes_first:
             bounds, slack = stressed.bounds(budget=budget)
-            w = demand_stress(A, eps, stressed.loads(np.arange(n), budget=budget), budget)
-            if w is not None:
-                again, missed = _OneStress(A, eps, w, normal=stressed.normal).bounds(budget=budget)
-                better = again + missed < bounds + slack
-                bounds, slack = np.where(better, again, bounds), np.where(better, missed, slack)
+            bounds, slack = _with_demand_stress(stressed, bounds, slack, budget, columns=np.arange(n))
             proved = float(closed_bounds(bounds, slack).max(initial=0.0))
             if math.isfinite(proved):
                 return proved
@@ -705,7 +707,7 @@ def assess(matrix, contacts, scale: float, stress, tolerance, source: str, *, pe
     usable = stress.shape == (A.shape[0],) and bool(np.all(stress > 0))
     if n <= ONE_STRESS_COLUMNS and usable:
         stressed = _OneStress(A, eps, stress)
-        if stressed.work * ONE_STRESS_WORK <= ONE_STRESS_FIRST * max(A.nnz, 1):
+        if stressed.goes_first:
             # cheap enough to go first: a sample of one chunk says whether it is likely to prove (small p4 patches
             # and hexagons: 3 to 10 times faster than the load paths; p4 radius 9 and 12: the load paths prove
             # nothing); it stops at the first chunk with a bound above 1, and the load paths follow

@@ -25,6 +25,8 @@ COARSE_RATIO = 0.01
 #: holds (the GeoCombSurfX patches written with 4 digits at coordinates up to 150, 3 % of a block: block 0 comes
 #: out of the file, not of the design), and float32 coordinates 1e6 model sizes from the origin leave no contact.
 UNDECIDABLE_RATIO = 0.02
+
+
 def coarseness(assembly: Assembly, frame, precision: Precision) -> tuple[float, int | None]:
     """``(ratio, block)``: the largest rounding (times :data:`~interlock.verify.precision.PRECISION_FACTOR`) of a
     free block, or of a neighbour of one, against its size, and that block (``(0.0, None)`` without free blocks)."""
